@@ -1,0 +1,54 @@
+# p105 — every target installs what it needs into .venv first, so a fresh
+# machine with only Python 3.11+ runs `make demo` and `make test` as they are.
+
+PYTHON ?= python3
+VENV   ?= .venv
+BIN     = $(VENV)/bin
+PY      = $(BIN)/python
+P105    = $(BIN)/p105
+STAMP   = $(VENV)/.installed
+SHARED ?= ../shared
+FUZZ_SECONDS ?= 120
+
+.PHONY: all install demo test test-all fuzz man bench bench-parse clean
+
+all: test
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+install: $(STAMP)
+
+# The main job on a shipped example: Part 21 -> JSON model -> Part 21, and
+# proof that the canonical form is a fixed point of the round trip.
+demo: $(STAMP)
+	@mkdir -p build
+	$(P105) parse examples/revolute_ap242.stp -o build/revolute.json
+	$(P105) export --to p21 build/revolute.json -o build/revolute.stp
+	$(P105) parse build/revolute.stp | $(P105) export --to p21 | cmp - build/revolute.stp
+	$(P105) parse --stream examples/revolute_p105_1996_ap214.stp | $(P105) export --to p21
+	@echo "demo: round trip is byte-stable (build/revolute.json, build/revolute.stp)"
+
+test: $(STAMP)
+	$(PY) -m pytest -q -m "not slow"
+
+test-all: $(STAMP)
+	$(PY) -m pytest -q
+
+fuzz: $(STAMP)
+	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) $(PY) tests/fuzz_reader.py
+
+man: $(STAMP)
+	$(PY) -m p105cli.manpages man
+
+bench: bench-parse
+
+bench-parse: $(STAMP)
+	$(PY) -m pip install --quiet -e '.[bench]'
+	$(PY) bench/bench_parse.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks.md
+
+clean:
+	rm -rf build .pytest_cache .hypothesis

@@ -1,0 +1,5 @@
+import sys
+
+from p105cli.cli import main
+
+sys.exit(main())

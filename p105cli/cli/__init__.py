@@ -1,0 +1,121 @@
+"""The p105 command group and the process-level half of the CLI contract.
+
+``main`` maps every way a run can end onto the documented exit codes
+(contract.ExitCode); subcommands only raise.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from p105cli import __version__
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag
+
+# Subcommands are registered here only when they work; each lives in its own module.
+SUBCOMMANDS = {
+    "parse": ("p105cli.cli.parse", "parse"),
+    "export": ("p105cli.cli.export", "export"),
+}
+
+VERSION_PACKAGES = ("click", "numpy", "scipy", "rich")
+
+
+class LazyGroup(click.Group):
+    """Imports a subcommand's module only when that subcommand runs (fast start-up)."""
+
+    def list_commands(self, ctx):
+        return sorted(SUBCOMMANDS)
+
+    def get_command(self, ctx, name):
+        if name not in SUBCOMMANDS:
+            return None
+        import importlib
+        module, attr = SUBCOMMANDS[name]
+        return getattr(importlib.import_module(module), attr)
+
+
+def _show_versions(ctx, param, value):
+    if not value or ctx.resilient_parsing:
+        return
+    from importlib import metadata
+    import platform
+    click.echo(f"p105 {__version__}")
+    click.echo(f"python {platform.python_version()} ({sys.executable})")
+    for name in VERSION_PACKAGES:
+        try:
+            click.echo(f"{name} {metadata.version(name)}")
+        except metadata.PackageNotFoundError:
+            click.echo(f"{name} not installed")
+    ctx.exit(0)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]},
+             epilog=EXIT_STATUS_TEXT)
+@click.version_option(__version__, "--version", prog_name="p105", message="%(prog)s %(version)s")
+@click.option("--show-versions", is_flag=True, expose_value=False, is_eager=True, callback=_show_versions,
+              help="Show the versions of p105, Python and the libraries it uses, and exit.")
+@click.option("-v", "--verbose", count=True, help="More diagnostics; tracebacks for internal errors.")
+@click.option("-q", "--quiet", is_flag=True, help="Only errors on stderr.")
+def cli(verbose, quiet):
+    """p105: Unix-style filters for mechanism kinematics in ISO 10303-105 (STEP Part 105) data.
+
+    Each subcommand reads a Part 21 file or a p105/1 JSON model (sniffed)
+    from FILE or stdin and writes data, and only data, to stdout.
+    """
+    Settings.verbosity = -1 if quiet else verbose
+
+
+def _quiet_broken_pipe() -> int:
+    # Point stdout at /dev/null so the interpreter's final flush cannot fail loudly.
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except OSError:
+        pass
+    return ExitCode.BROKEN_PIPE
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the p105 CLI and return its exit code."""
+    from p105cli.step.errors import StepError
+    Settings.verbosity = 0
+    try:
+        cli.main(args=argv, prog_name="p105", standalone_mode=False)
+        sys.stdout.flush()
+        return ExitCode.OK
+    except click.exceptions.Exit as stop:
+        return stop.exit_code
+    except InputError as err:
+        err.show()
+        return ExitCode.USAGE
+    except click.exceptions.Abort:
+        diag("error", "interrupted")
+        return ExitCode.INTERRUPTED
+    except click.ClickException as err:
+        err.show()
+        return ExitCode.USAGE if isinstance(err, click.UsageError) else err.exit_code
+    except StepError as err:
+        diag("error", str(err))
+        if Settings.verbosity > 0:
+            import traceback
+            traceback.print_exc()
+        return ExitCode.USAGE
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
+    except KeyboardInterrupt:
+        diag("error", "interrupted")
+        return ExitCode.INTERRUPTED
+    except MemoryError:
+        diag("error", "out of memory (try --stream for very large files)")
+        return ExitCode.INTERNAL
+    except Exception as err:  # noqa: BLE001 - the last line of defence of the contract
+        diag("error", f"internal error (a bug in p105, please report it): {type(err).__name__}: {err}")
+        if Settings.verbosity > 0:
+            import traceback
+            traceback.print_exc()
+        else:
+            sys.stderr.write("p105: run again with -v for the traceback\n")
+        return ExitCode.INTERNAL

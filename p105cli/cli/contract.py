@@ -1,0 +1,180 @@
+"""The contract every p105 subcommand keeps, in one place.
+
+* exit codes (``ExitCode``), and how every failure maps onto them;
+* input: a path or ``-``/nothing for stdin, format sniffed, never modified;
+* output: stdout (data only) or ``-o FILE`` written atomically;
+* diagnostics on stderr: plain text in pipes and CI, rich on a terminal;
+  progress bars only on a terminal;
+* a closed pipe ends quietly, Ctrl-C exits 130.
+
+Subcommand modules use these helpers and nothing else for I/O.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import sys
+import tempfile
+from enum import IntEnum
+
+import click
+
+
+class ExitCode(IntEnum):
+    OK = 0
+    FINDINGS = 1        # validation findings, an analysis that did not succeed
+    USAGE = 2           # bad command line, or unreadable / malformed input
+    INTERNAL = 3        # a bug in p105: the message says so
+    BROKEN_PIPE = 141   # the reader of stdout went away (as for a process killed by SIGPIPE)
+    INTERRUPTED = 130   # Ctrl-C
+
+
+EXIT_STATUS_TEXT = """\b
+Exit status:
+  0    success
+  1    findings or non-convergence (validation errors, an analysis that failed)
+  2    usage error, or unreadable or malformed input (FILE:LINE:COL or #id named)
+  3    internal error (a bug: traceback shown with -v)
+  130  interrupted (Ctrl-C)
+  141  stdout closed early (e.g. piped into head); nothing is printed"""
+
+
+class InputError(click.ClickException):
+    """Unreadable or malformed input: exit 2 with the message as given."""
+
+    exit_code = ExitCode.USAGE
+
+    def show(self, file=None) -> None:
+        diag("error", self.format_message())
+
+
+class Settings:
+    """Process-wide CLI settings set by the group's options."""
+
+    verbosity = 0  # -1 quiet, 0 normal, >=1 verbose
+
+
+def _stderr_is_terminal() -> bool:
+    return sys.stderr.isatty() and not os.environ.get("CI")
+
+
+def diag(level: str, message: str) -> None:
+    """Write one diagnostic line to stderr (``level`` is error, warning or note)."""
+    if level != "error" and Settings.verbosity < 0:
+        return
+    if _stderr_is_terminal():
+        from rich.console import Console
+        style = {"error": "bold red", "warning": "yellow", "note": "cyan"}.get(level, "")
+        Console(stderr=True, highlight=False).print(f"[{style}]{level}[/]: {message}", markup=True,
+                                                    soft_wrap=True)
+    else:
+        sys.stderr.write(f"p105: {level}: {message}\n")
+
+
+# ---------------------------------------------------------------- input
+
+def read_input_bytes(path: str | None) -> tuple[bytes, str]:
+    """The bytes of ``path`` (``-`` or None: stdin) and the name to report."""
+    if path in (None, "-"):
+        return sys.stdin.buffer.read(), "<stdin>"
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(), path
+    except OSError as err:
+        raise InputError(f"{path}: cannot read: {err.strerror or err}") from None
+
+
+def load_document(path: str | None):
+    """Read a model from a Part 21 or JSON input (sniffed); StepError on bad input."""
+    from p105cli.step import decode_bytes, read_any
+    raw, source = read_input_bytes(path)
+    text = decode_bytes(raw)
+    del raw
+    doc = read_any(text, source)
+    return doc
+
+
+# ---------------------------------------------------------------- output
+
+def _stdout_text() -> io.TextIOWrapper:
+    return io.TextIOWrapper(sys.stdout.buffer, encoding="utf-8", newline="\n",
+                            write_through=False, line_buffering=False)
+
+
+@contextlib.contextmanager
+def open_output(path: str | None, inputs: tuple = ()):
+    """A text stream for the command's data: stdout, or ``path`` written atomically.
+
+    The file appears only when everything was written; on any failure the
+    temporary file is removed and an existing file is left as it was. An
+    output that is one of the inputs is refused: input is never modified.
+    """
+    if path in (None, "-"):
+        out = _stdout_text()
+        try:
+            yield out
+            out.flush()
+        finally:
+            out.detach()
+        return
+    for src in inputs:
+        if src not in (None, "-") and os.path.exists(path) and os.path.exists(src) \
+                and os.path.samefile(src, path):
+            raise click.UsageError(f"output {path} is the input {src}: p105 never overwrites its input")
+    directory = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".p105-", suffix=".tmp", dir=directory)
+    try:
+        with open(fd, "w", encoding="utf-8", newline="\n") as out:
+            yield out
+            out.flush()
+            os.fsync(out.fileno())
+        if os.path.exists(path):
+            os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        else:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+class Progress:
+    """A rich progress bar on a terminal; nothing at all otherwise."""
+
+    def __init__(self, total: int, description: str):
+        self._bar = None
+        if _stderr_is_terminal() and Settings.verbosity >= 0 and total > 50_000:
+            from rich.console import Console
+            from rich.progress import Progress as RichProgress
+            self._bar = RichProgress(transient=True, console=Console(stderr=True))
+            self._task = self._bar.add_task(description, total=total)
+
+    def __enter__(self):
+        if self._bar is not None:
+            self._bar.start()
+        return self
+
+    def advance(self, n: int = 1) -> None:
+        if self._bar is not None:
+            self._bar.advance(self._task, n)
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.stop()
+
+
+def report_warnings(doc) -> None:
+    """Print the reader's warnings and dangling references of ``doc`` on stderr."""
+    from p105cli.step.checks import dangling_references
+    text = getattr(doc, "text", None)
+    for message, offset in getattr(doc, "warnings", ()):
+        if text is not None:
+            line, col = doc.line_col(offset)
+            diag("warning", f"{doc.source}:{line}:{col}: {message}")
+    for referrer, missing in dangling_references(doc):
+        diag("warning", f"{doc.source}: #{referrer}: reference to #{missing}, which is not in the file")

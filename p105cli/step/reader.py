@@ -1,0 +1,234 @@
+"""Read a Part 21 exchange structure (ISO 10303-21 edition 3) lazily.
+
+``read_step`` parses the file's frame (HEADER, DATA sections, and the
+edition 3 ANCHOR / REFERENCE / SIGNATURE sections, which are kept
+verbatim), indexes every instance in one pass and decodes nothing else.
+``StepFile.record(id)`` decodes one instance; ``StepFile.records()``
+decodes them all, in file order.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from .errors import StepError, StepStructureError, StepSyntaxError
+from .index import InstanceIndex, _SKIP_RE, index_data_section
+from .lexer import Tokens, parse_instance_body, parse_parameters
+
+MAGIC = "ISO-10303-21"
+_FRAME_WORD = re.compile(r"(ISO-10303-21|END-ISO-10303-21|HEADER|DATA|ANCHOR|REFERENCE|SIGNATURE|ENDSEC)\b", re.I)
+# Raw body of a section kept verbatim, up to its ENDSEC; strings and comments may hold anything.
+_RAW_SECTION = re.compile(r"(?:[^'/E]++|'[^']*+'|/\*.*?\*/|/|E(?!NDSEC[ \t\r\n]*;))*+", re.S)
+
+HEADER_FIELDS = {
+    "file_description": ("description", "implementation_level"),
+    "file_name": ("name", "time_stamp", "author", "organization",
+                  "preprocessor_version", "originating_system", "authorization"),
+}
+
+
+def header_to_json(entities: list[tuple[str, list]]) -> dict:
+    """Map header entities to the JSON model: the three standard ones by name."""
+    header: dict = {}
+    other: list = []
+    for etype, args in entities:
+        fields = HEADER_FIELDS.get(etype)
+        if fields is not None and etype not in header and len(args) == len(fields):
+            header[etype] = dict(zip(fields, args))
+        elif (etype == "file_schema" and etype not in header and len(args) == 1
+              and isinstance(args[0], list) and all(isinstance(s, str) for s in args[0])):
+            header[etype] = list(args[0])
+        else:
+            other.append({"type": etype, "args": args})
+    if other:
+        header["other"] = other
+    return header
+
+
+def header_from_json(header: dict) -> list[tuple[str, list]]:
+    """The header's entities in the order a writer puts them."""
+    out = []
+    for etype, fields in HEADER_FIELDS.items():
+        if etype in header:
+            out.append((etype, [header[etype][f] for f in fields]))
+        if etype == "file_name" and "file_schema" in header:
+            out.append(("file_schema", [list(header["file_schema"])]))
+    for entry in header.get("other", []):
+        out.append((entry["type"], entry["args"]))
+    return out
+
+
+@dataclass
+class DataSection:
+    """One DATA section: its parameters (edition 3: name and schema) and its instances."""
+    parameters: list | None
+    count: int
+
+
+@dataclass
+class StepFile:
+    """An indexed exchange structure. Instances are decoded on demand."""
+
+    text: str
+    source: str
+    header: dict
+    sections: list[DataSection]
+    index: InstanceIndex
+    other_sections: list[dict] = field(default_factory=list)
+    warnings: list[tuple[str, int]] = field(default_factory=list)
+
+    def _warn(self, message: str, offset: int) -> None:
+        self.warnings.append((message, offset))
+
+    def __len__(self) -> int:
+        return len(self.index)
+
+    def _decode_slot(self, k: int) -> dict:
+        idx = self.index
+        try:
+            return parse_instance_body(self.text, idx.starts[k], idx.ends[k], self._warn)
+        except StepError as err:
+            _attach(err, self.text, self.source)
+            raise
+
+    def record(self, instance_id: int) -> dict:
+        """The decoded instance ``#instance_id`` (KeyError if absent)."""
+        k = self.index.slot(instance_id)
+        if k < 0:
+            raise KeyError(instance_id)
+        return self._decode_slot(k)
+
+    def records(self):
+        """Every instance, decoded, in file order (the bulk decoder; see bulk.py)."""
+        from .bulk import decode_all
+        return decode_all(self)
+
+    def careful_records(self):
+        """Every instance decoded one by one by the reference tokenizer."""
+        for k in range(len(self.index)):
+            yield self._decode_slot(k)
+
+    def slots_of_type(self, *types: str) -> list[int]:
+        """File-order positions of the simple instances of the given (lower-case) types."""
+        wanted = set(types)
+        return [k for k, t in enumerate(self.index.types) if t in wanted]
+
+    def line_col(self, offset: int) -> tuple[int, int]:
+        err = StepSyntaxError("", offset, self.text)
+        return err.line, err.column
+
+
+def _attach(err: StepError, text: str, source: str) -> None:
+    err.source = source
+    if isinstance(err, StepSyntaxError) and not err.line:
+        err.attach_text(text)
+
+
+def decode_bytes(raw: bytes) -> str:
+    """Text of a Part 21 file: UTF-8 (edition 3), else ISO 8859-1 (older writers)."""
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return raw.decode("latin-1")
+
+
+def read_step(text: str, source: str = "<input>") -> StepFile:
+    """Parse the frame of a Part 21 text and index its instances."""
+    try:
+        return _read(text, source)
+    except StepError as err:
+        _attach(err, text, source)
+        raise
+
+
+def _skip(text: str, pos: int) -> int:
+    pos = _SKIP_RE.match(text, pos).end()
+    if text.startswith("/*", pos):
+        raise StepSyntaxError("unterminated comment", pos)
+    return pos
+
+
+def _frame_word(text: str, pos: int, expected: str | None = None) -> tuple[str, int]:
+    pos = _skip(text, pos)
+    m = _FRAME_WORD.match(text, pos)
+    word = m.group(1).upper() if m else None
+    if word is None or (expected is not None and word != expected):
+        found = text[pos:pos + 20].split(None, 1)[0] if text[pos:pos + 20].strip() else "end of input"
+        want = expected or "a section keyword (DATA, ANCHOR, REFERENCE, SIGNATURE, END-ISO-10303-21)"
+        raise StepSyntaxError(f"expected {want}, found {found!r}", pos)
+    return word, m.end()
+
+
+def _semicolon(text: str, pos: int, after: str) -> int:
+    pos = _skip(text, pos)
+    if not text.startswith(";", pos):
+        raise StepSyntaxError(f"expected ';' after {after}", pos)
+    return pos + 1
+
+
+def _read(text: str, source: str) -> StepFile:
+    warnings: list[tuple[str, int]] = []
+
+    def warn(message, offset):
+        warnings.append((message, offset))
+
+    pos = _skip(text, 0)
+    if not text.startswith(MAGIC, pos) or text.startswith("END-", pos):
+        raise StepSyntaxError("not a Part 21 file: it does not start with 'ISO-10303-21;'", pos)
+    pos = _semicolon(text, pos + len(MAGIC), MAGIC)
+    _, pos = _frame_word(text, pos, "HEADER")
+    pos = _semicolon(text, pos, "HEADER")
+
+    entities = []
+    tokens = Tokens(text, pos)
+    while True:
+        kind, lex, at = tokens.next()
+        if kind == "keyword" and lex.upper() == "ENDSEC":
+            tokens.expect(";", "';' after ENDSEC")
+            break
+        if kind != "keyword":
+            shown = "end of input" if kind == "eof" else repr(lex)
+            raise StepSyntaxError(f"expected a header entity or ENDSEC, found {shown}", at)
+        args = parse_parameters(tokens, warn)
+        tokens.expect(";", f"';' after header entity {lex}")
+        entities.append((lex.lower(), args))
+    pos = tokens.pos
+
+    index = InstanceIndex()
+    sections: list[DataSection] = []
+    other: list[dict] = []
+    while True:
+        word, after = _frame_word(text, pos)
+        if word == "END-ISO-10303-21":
+            pos = _semicolon(text, after, word)
+            break
+        if word in ("ANCHOR", "REFERENCE", "SIGNATURE"):
+            body_start = _semicolon(text, after, word)
+            m = _RAW_SECTION.match(text, body_start)
+            if not text.startswith("ENDSEC", m.end()):
+                raise StepSyntaxError(f"{word} section is not closed by ENDSEC;", body_start)
+            other.append({"keyword": word, "after_data": len(sections), "text": text[body_start:m.end()]})
+            pos = _semicolon(text, m.end() + len("ENDSEC"), "ENDSEC")
+            continue
+        if word != "DATA":
+            raise StepSyntaxError(f"unexpected {word} here", _skip(text, pos))
+        q = _skip(text, after)
+        parameters = None
+        if text.startswith("(", q):
+            tokens = Tokens(text, q)
+            parameters = parse_parameters(tokens, warn)
+            q = tokens.pos
+        q = _semicolon(text, q, "DATA")
+        before = len(index)
+        pos = index_data_section(text, q, len(text), index)
+        sections.append(DataSection(parameters, len(index) - before))
+    if not sections:
+        raise StepSyntaxError("no DATA section", pos)
+    rest = _SKIP_RE.match(text, pos).end()
+    if rest < len(text):
+        warn("text after END-ISO-10303-21; ignored", rest)
+    index.finish()
+    return StepFile(text, source, header_to_json(entities), sections, index, other, warnings)
