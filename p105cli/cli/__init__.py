@@ -12,7 +12,7 @@ import sys
 import click
 
 from p105cli import __version__
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, PipeClosed, Settings, diag
 
 # Subcommands are registered here only when they work; each lives in its own module.
 SUBCOMMANDS = {
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
             import traceback
             traceback.print_exc()
         return ExitCode.USAGE
-    except BrokenPipeError:
+    except (BrokenPipeError, PipeClosed):
         return _quiet_broken_pipe()
     except KeyboardInterrupt:
         diag("error", "interrupted")

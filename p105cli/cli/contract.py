@@ -50,6 +50,14 @@ class InputError(click.ClickException):
         diag("error", self.format_message())
 
 
+class OutputError(InputError):
+    """The output cannot be written (missing directory, no permission): exit 2."""
+
+
+class PipeClosed(Exception):
+    """The reader of stdout went away. (Click turns a raw EPIPE into exit 1; we want 141.)"""
+
+
 class Settings:
     """Process-wide CLI settings set by the group's options."""
 
@@ -116,15 +124,23 @@ def open_output(path: str | None, inputs: tuple = ()):
         try:
             yield out
             out.flush()
+        except BrokenPipeError:
+            raise PipeClosed() from None
         finally:
-            out.detach()
+            try:
+                out.detach()
+            except (BrokenPipeError, ValueError):
+                pass
         return
     for src in inputs:
         if src not in (None, "-") and os.path.exists(path) and os.path.exists(src) \
                 and os.path.samefile(src, path):
             raise click.UsageError(f"output {path} is the input {src}: p105 never overwrites its input")
     directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".p105-", suffix=".tmp", dir=directory)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".p105-", suffix=".tmp", dir=directory)
+    except OSError as err:
+        raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
     try:
         with open(fd, "w", encoding="utf-8", newline="\n") as out:
             yield out
@@ -136,7 +152,10 @@ def open_output(path: str | None, inputs: tuple = ()):
             umask = os.umask(0)
             os.umask(umask)
             os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
+        try:
+            os.replace(tmp, path)
+        except OSError as err:
+            raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)

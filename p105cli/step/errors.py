@@ -54,6 +54,10 @@ class StepStructureError(StepError):
     def locate(self) -> str:
         return f"#{self.instance_id}" if self.instance_id is not None else ""
 
+    def __str__(self) -> str:
+        where = self.locate()
+        return f"{self.source}: {where}: {self.message}" if where else f"{self.source}: {self.message}"
+
 
 class ModelError(StepError):
     """A JSON model that does not follow the p105/1 format."""

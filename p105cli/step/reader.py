@@ -176,7 +176,7 @@ def _read(text: str, source: str) -> StepFile:
         warnings.append((message, offset))
 
     pos = _skip(text, 0)
-    if not text.startswith(MAGIC, pos) or text.startswith("END-", pos):
+    if text[pos:pos + len(MAGIC)].upper() != MAGIC:
         raise StepSyntaxError("not a Part 21 file: it does not start with 'ISO-10303-21;'", pos)
     pos = _semicolon(text, pos + len(MAGIC), MAGIC)
     _, pos = _frame_word(text, pos, "HEADER")

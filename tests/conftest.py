@@ -1,0 +1,66 @@
+"""Shared test helpers: minimal files, the CLI runner, type-exact comparison."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = Path(os.environ.get("P105_SHARED", ROOT.parent / "shared"))
+CORPUS = SHARED / "corpus"
+EXAMPLES = ROOT / "examples"
+
+HEADER = ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
+          "FILE_NAME('t.stp','2026-01-01T00:00:00',(''),(''),'','','');\n"
+          "FILE_SCHEMA(('TEST_SCHEMA'));\nENDSEC;\n")
+
+
+def p21(instances: str, header: str = HEADER) -> str:
+    """A complete Part 21 text around the given DATA section body."""
+    return f"{header}DATA;\n{instances}\nENDSEC;\nEND-ISO-10303-21;\n"
+
+
+def run_cli(*args, input: bytes | str | None = None, timeout: float = 60, env=None):
+    """Run ``python -m p105cli ARGS``; returns CompletedProcess with bytes out/err."""
+    if isinstance(input, str):
+        input = input.encode("utf-8")
+    full_env = dict(os.environ)
+    full_env.pop("CI", None)
+    if env:
+        full_env.update(env)
+    return subprocess.run([sys.executable, "-m", "p105cli", *map(str, args)], input=input,
+                          capture_output=True, timeout=timeout, env=full_env, cwd=ROOT)
+
+
+def same_value(a, b) -> bool:
+    """Equality that also requires the same types and the same sign of zero."""
+    if type(a) is not type(b):
+        return False
+    if type(a) is float:
+        if a == 0.0 and b == 0.0:
+            return math.copysign(1.0, a) == math.copysign(1.0, b)
+        return a == b
+    if type(a) is list:
+        return len(a) == len(b) and all(same_value(x, y) for x, y in zip(a, b))
+    if type(a) is dict:
+        return a.keys() == b.keys() and all(same_value(a[k], b[k]) for k in a)
+    return a == b
+
+
+def corpus_files() -> list[Path]:
+    """Every Part 21 file of the shared corpus and of examples/."""
+    files = sorted(EXAMPLES.glob("*.stp"))
+    if CORPUS.is_dir():
+        files += sorted(p for p in CORPUS.rglob("*") if p.suffix.lower() in (".stp", ".step", ".p21"))
+    return files
+
+
+@pytest.fixture
+def tmp_cwd(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
