@@ -1,0 +1,12 @@
+"""EXPRESS (ISO 10303-11) schemas: reader, data model, Part 21 attribute order.
+
+A science module: no click, no numpy (it is imported on the CLI's start-up
+path). ``load_schema(path)`` is the usual entry point; see ``express.py``
+for the parser and ``model.py`` for the data model.
+"""
+
+from .express import (  # noqa: F401
+    BUILTIN_FUNCTIONS, BUILTIN_PROCEDURES, PARSER_VERSION, ExpressSyntaxError, cache_dir,
+    load_schema, load_schemas, parse_schema, parse_schemas,
+)
+from .model import Entity, P21Attribute, Schema, SchemaError  # noqa: F401

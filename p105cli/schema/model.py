@@ -1,0 +1,775 @@
+"""The data model of a parsed EXPRESS (ISO 10303-11) schema.
+
+Everything here is a plain dataclass: the parser (``express.py``) builds
+it, the cache pickles it, and later consumers (the evaluator, the Part 21
+schema checks) only read it. Every node carries ``line``, the 1-based
+source line where it starts, so that messages can point into the schema.
+
+Names (entities, types, attributes, variables, enumeration items) are kept
+lower case, as EXPRESS identifiers are case-insensitive. String literals
+keep their case.
+
+Expressions
+    Literal, Name, SelfRef, BuiltinConstant, UnaryOp, BinaryOp, Interval,
+    AttributeRef (``.attr``), GroupRef (``\\entity``), IndexRef (``[i]`` or
+    ``[lo:hi]``), Call (function call or entity constructor; ``kind`` says
+    which once the schema is known), AggregateInit, Query.
+
+Statements
+    NullStmt, Assignment, IfStmt, CaseStmt, RepeatStmt, ReturnStmt,
+    EscapeStmt, SkipStmt, CompoundStmt, AliasStmt, ProcedureCall.
+
+Types
+    SimpleType, NamedType, AggregateType, GenericType, SelectType,
+    EnumerationType.
+
+Declarations
+    Constant, TypeDecl, Entity (ExplicitAttribute, DerivedAttribute,
+    InverseAttribute, UniqueRule, WhereRule, SupertypeOp), Function,
+    Procedure, Rule, SubtypeConstraint, Interface, Schema.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional, Union
+
+
+class SchemaError(LookupError):
+    """A question about the schema that the schema cannot answer
+    (unknown entity, a SUBTYPE OF naming an undeclared entity, ...)."""
+
+
+class Node:
+    """Base of every AST node; subclasses are dataclasses with ``line``."""
+
+    __slots__ = ()
+
+
+# --------------------------------------------------------------------------
+# expressions
+
+
+class Expr(Node):
+    __slots__ = ()
+
+
+@dataclass(eq=True)
+class Literal(Expr):
+    """A literal. ``kind`` is one of ``integer`` (int), ``real`` (float),
+    ``string`` (str; simple and encoded strings alike, already decoded),
+    ``binary`` (str of '0'/'1' digits), ``logical`` (True, False, or None for
+    UNKNOWN) and ``indeterminate`` (``?``; value None)."""
+
+    kind: str
+    value: Any
+    line: int = 0
+    encoded: bool = False  # string given as "..." (encoded) in the source
+
+
+@dataclass(eq=True)
+class Name(Expr):
+    """A bare identifier: attribute, variable, parameter, constant,
+    enumeration item, or an entity/type name used as a population/type."""
+
+    name: str
+    line: int = 0
+
+
+@dataclass(eq=True)
+class SelfRef(Expr):
+    line: int = 0
+
+
+@dataclass(eq=True)
+class BuiltinConstant(Expr):
+    """``CONST_E`` or ``PI`` (name kept lower case)."""
+
+    name: str
+    line: int = 0
+
+
+@dataclass(eq=True)
+class UnaryOp(Expr):
+    """``op`` is ``not``, ``-`` or ``+``."""
+
+    op: str
+    operand: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class BinaryOp(Expr):
+    """``op``: ``** * / div mod and || + - or xor = <> < > <= >= :=: :<>: in like``
+    (word operators lower case)."""
+
+    op: str
+    left: Expr
+    right: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Interval(Expr):
+    """``{low op1 item op2 high}``, each op ``<`` or ``<=``."""
+
+    low: Expr
+    op1: str
+    item: Expr
+    op2: str
+    high: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class AttributeRef(Expr):
+    """``base.attribute``."""
+
+    base: Expr
+    attribute: str
+    line: int = 0
+
+
+@dataclass(eq=True)
+class GroupRef(Expr):
+    """``base\\entity`` (group qualifier)."""
+
+    base: Expr
+    entity: str
+    line: int = 0
+
+
+@dataclass(eq=True)
+class IndexRef(Expr):
+    """``base[index]``, or ``base[index:upper]`` when ``upper`` is not None."""
+
+    base: Expr
+    index: Expr
+    upper: Optional[Expr] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Call(Expr):
+    """``name(args)``: a function call or an entity constructor (same syntax).
+
+    ``kind`` is resolved after the whole file is read: ``builtin`` (an
+    EXPRESS built-in function), ``function`` (a declared FUNCTION),
+    ``entity`` (an entity constructor) or ``unknown``."""
+
+    name: str
+    args: list
+    line: int = 0
+    kind: str = "unknown"
+
+
+@dataclass(eq=True)
+class AggregateElement(Node):
+    """One element of an aggregate initialiser: ``value`` or ``value : repeat``."""
+
+    value: Expr
+    repeat: Optional[Expr] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class AggregateInit(Expr):
+    """``[e1, e2 : n, ...]``."""
+
+    elements: list
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Query(Expr):
+    """``QUERY(variable <* aggregate | condition)``."""
+
+    variable: str
+    aggregate: Expr
+    condition: Expr
+    line: int = 0
+
+
+# --------------------------------------------------------------------------
+# statements
+
+
+class Stmt(Node):
+    __slots__ = ()
+
+
+@dataclass(eq=True)
+class NullStmt(Stmt):
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Assignment(Stmt):
+    """``target := value;`` (target: Name with qualifiers)."""
+
+    target: Expr
+    value: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class IfStmt(Stmt):
+    condition: Expr
+    then_body: list
+    else_body: Optional[list] = None  # None: no ELSE part
+    line: int = 0
+
+
+@dataclass(eq=True)
+class CaseAction(Node):
+    labels: list
+    body: Stmt
+    line: int = 0
+
+
+@dataclass(eq=True)
+class CaseStmt(Stmt):
+    selector: Expr
+    actions: list
+    otherwise: Optional[Stmt] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class RepeatStmt(Stmt):
+    """REPEAT [variable := start TO end [BY increment]] [WHILE c] [UNTIL c]."""
+
+    variable: Optional[str]
+    start: Optional[Expr]
+    end: Optional[Expr]
+    increment: Optional[Expr]
+    while_cond: Optional[Expr]
+    until_cond: Optional[Expr]
+    body: list
+    line: int = 0
+
+
+@dataclass(eq=True)
+class ReturnStmt(Stmt):
+    value: Optional[Expr] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class EscapeStmt(Stmt):
+    line: int = 0
+
+
+@dataclass(eq=True)
+class SkipStmt(Stmt):
+    line: int = 0
+
+
+@dataclass(eq=True)
+class CompoundStmt(Stmt):
+    body: list
+    line: int = 0
+
+
+@dataclass(eq=True)
+class AliasStmt(Stmt):
+    name: str
+    target: Expr
+    body: list
+    line: int = 0
+
+
+@dataclass(eq=True)
+class ProcedureCall(Stmt):
+    """``name(args);`` — ``builtin`` for INSERT/REMOVE."""
+
+    name: str
+    args: list
+    builtin: bool = False
+    line: int = 0
+
+
+# --------------------------------------------------------------------------
+# types
+
+
+class TypeSpec(Node):
+    __slots__ = ()
+
+
+@dataclass(eq=True)
+class SimpleType(TypeSpec):
+    """INTEGER, REAL [(precision)], NUMBER, LOGICAL, BOOLEAN,
+    STRING [(width) [FIXED]], BINARY [(width) [FIXED]]."""
+
+    name: str
+    width: Optional[Expr] = None  # STRING/BINARY width, REAL precision
+    fixed: bool = False
+    line: int = 0
+
+
+@dataclass(eq=True)
+class NamedType(TypeSpec):
+    """A reference to an entity or defined type by name."""
+
+    name: str
+    line: int = 0
+
+
+@dataclass(eq=True)
+class AggregateType(TypeSpec):
+    """LIST/SET/BAG/ARRAY [lower:upper] OF [OPTIONAL] [UNIQUE] element, or the
+    generalised AGGREGATE [:label] OF element. Bounds are expressions (``?``
+    is a Literal of kind ``indeterminate``); None when not given."""
+
+    kind: str  # list | set | bag | array | aggregate
+    element: TypeSpec
+    lower: Optional[Expr] = None
+    upper: Optional[Expr] = None
+    optional: bool = False  # ARRAY only
+    unique: bool = False  # ARRAY, LIST
+    label: Optional[str] = None  # AGGREGATE : label
+    line: int = 0
+
+
+@dataclass(eq=True)
+class GenericType(TypeSpec):
+    """GENERIC [:label] or GENERIC_ENTITY [:label] (kind ``generic`` /
+    ``generic_entity``)."""
+
+    kind: str
+    label: Optional[str] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class SelectType(TypeSpec):
+    items: list  # names
+    extensible: bool = False
+    generic_entity: bool = False
+    based_on: Optional[str] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class EnumerationType(TypeSpec):
+    items: list  # names (lower case)
+    extensible: bool = False
+    based_on: Optional[str] = None
+    line: int = 0
+
+
+# --------------------------------------------------------------------------
+# declarations
+
+
+@dataclass(eq=True)
+class WhereRule(Node):
+    """A domain rule of a WHERE clause; ``label`` is None when unlabelled."""
+
+    label: Optional[str]
+    expr: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Constant(Node):
+    name: str
+    type: TypeSpec
+    value: Expr
+    line: int = 0
+
+
+@dataclass(eq=True)
+class TypeDecl(Node):
+    name: str
+    underlying: TypeSpec
+    where: list = field(default_factory=list)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class ExplicitAttribute(Node):
+    """An explicit attribute. For a redeclaration ``SELF\\sup.attr [RENAMED n]``
+    ``name`` is ``attr``, ``supertype`` is ``sup`` and ``renamed`` is ``n``."""
+
+    name: str
+    type: TypeSpec
+    optional: bool = False
+    supertype: Optional[str] = None
+    renamed: Optional[str] = None
+    line: int = 0
+
+    @property
+    def redeclared(self) -> bool:
+        return self.supertype is not None
+
+    @property
+    def local_name(self) -> str:
+        return self.renamed or self.name
+
+
+@dataclass(eq=True)
+class DerivedAttribute(Node):
+    name: str
+    type: TypeSpec
+    expr: Expr
+    supertype: Optional[str] = None
+    renamed: Optional[str] = None
+    line: int = 0
+
+    @property
+    def redeclared(self) -> bool:
+        return self.supertype is not None
+
+    @property
+    def local_name(self) -> str:
+        return self.renamed or self.name
+
+
+@dataclass(eq=True)
+class InverseAttribute(Node):
+    """``name : [SET|BAG [lower:upper] OF] entity FOR [for_entity.]for_attribute``;
+    ``aggregate`` is None for a single-valued inverse."""
+
+    name: str
+    entity: str
+    for_attribute: str
+    aggregate: Optional[str] = None
+    lower: Optional[Expr] = None
+    upper: Optional[Expr] = None
+    for_entity: Optional[str] = None
+    supertype: Optional[str] = None
+    renamed: Optional[str] = None
+    line: int = 0
+
+    @property
+    def redeclared(self) -> bool:
+        return self.supertype is not None
+
+    @property
+    def local_name(self) -> str:
+        return self.renamed or self.name
+
+
+@dataclass(eq=True)
+class UniqueAttribute(Node):
+    """An attribute of a uniqueness rule: ``name`` or ``SELF\\supertype.name``."""
+
+    name: str
+    supertype: Optional[str] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class UniqueRule(Node):
+    label: Optional[str]
+    attributes: list  # of UniqueAttribute
+    line: int = 0
+
+
+@dataclass(eq=True)
+class SupertypeOp(Node):
+    """A node of a supertype expression: ``op`` is ``oneof``, ``and`` or
+    ``andor``; operands are entity names (str) or nested SupertypeOp."""
+
+    op: str
+    operands: list
+    line: int = 0
+
+
+SupertypeExpr = Union[str, SupertypeOp]
+
+
+@dataclass(eq=True)
+class Entity(Node):
+    name: str
+    supertypes: list = field(default_factory=list)  # SUBTYPE OF (...), in order
+    supertype_expr: Optional[SupertypeExpr] = None  # SUPERTYPE OF (...)
+    abstract: bool = False  # ABSTRACT [SUPERTYPE]
+    attributes: list = field(default_factory=list)  # ExplicitAttribute, declaration order
+    derived: list = field(default_factory=list)  # DerivedAttribute
+    inverse: list = field(default_factory=list)  # InverseAttribute
+    unique: list = field(default_factory=list)  # UniqueRule
+    where: list = field(default_factory=list)  # WhereRule
+    line: int = 0
+    subtypes: list = field(default_factory=list)  # computed: entities naming this one in SUBTYPE OF
+
+    @property
+    def abstract_supertype(self) -> bool:  # alias, the 1994 spelling
+        return self.abstract
+
+    def where_rule(self, label: str) -> WhereRule:
+        label = label.lower()
+        for w in self.where:
+            if w.label == label:
+                return w
+        raise SchemaError(f"entity {self.name} has no WHERE rule {label}")
+
+
+@dataclass(eq=True)
+class Parameter(Node):
+    name: str
+    type: TypeSpec
+    var: bool = False  # VAR parameter (procedures)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class LocalVariable(Node):
+    name: str
+    type: TypeSpec
+    init: Optional[Expr] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Function(Node):
+    name: str
+    parameters: list
+    return_type: TypeSpec
+    declarations: list = field(default_factory=list)  # nested FUNCTION/PROCEDURE/ENTITY/TYPE
+    constants: list = field(default_factory=list)
+    locals: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Procedure(Node):
+    name: str
+    parameters: list
+    declarations: list = field(default_factory=list)
+    constants: list = field(default_factory=list)
+    locals: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Rule(Node):
+    """A global RULE name FOR (entities); WHERE rules over those populations."""
+
+    name: str
+    applies_to: list
+    declarations: list = field(default_factory=list)
+    constants: list = field(default_factory=list)
+    locals: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    where: list = field(default_factory=list)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class SubtypeConstraint(Node):
+    name: str
+    entity: str
+    abstract: bool = False
+    total_over: list = field(default_factory=list)
+    expr: Optional[SupertypeExpr] = None
+    line: int = 0
+
+
+@dataclass(eq=True)
+class Interface(Node):
+    """USE FROM / REFERENCE FROM; ``items`` are (name, alias-or-None)."""
+
+    kind: str  # use | reference
+    schema: str
+    items: list = field(default_factory=list)
+    line: int = 0
+
+
+@dataclass(eq=True)
+class P21Attribute:
+    """One slot of a Part 21 simple instance (see Schema.p21_attributes).
+
+    ``entity`` is the entity that first declares the attribute; ``type`` and
+    ``optional`` are the effective ones after redeclarations; ``derived`` is
+    True when the entity or one of its supertypes redeclares the attribute
+    in a DERIVE clause (the slot is then written ``*``), and ``derived_in``
+    names the entity that does so."""
+
+    name: str
+    entity: str
+    type: TypeSpec
+    optional: bool = False
+    derived: bool = False
+    derived_in: Optional[str] = None
+    renamed: Optional[str] = None
+
+    def __str__(self) -> str:
+        return ("*" if self.derived else "") + self.name
+
+
+@dataclass(eq=True)
+class Schema(Node):
+    """A parsed schema. ``name`` is None for a bare list of declarations
+    (a file without SCHEMA ... END_SCHEMA, e.g. an extracted subset)."""
+
+    name: Optional[str]
+    version: Optional[str] = None
+    interfaces: list = field(default_factory=list)
+    constants: dict = field(default_factory=dict)
+    types: dict = field(default_factory=dict)
+    entities: dict = field(default_factory=dict)
+    functions: dict = field(default_factory=dict)
+    procedures: dict = field(default_factory=dict)
+    rules: dict = field(default_factory=dict)
+    subtype_constraints: dict = field(default_factory=dict)
+    line: int = 0
+    source: Optional[str] = field(default=None, compare=False)
+    _memo: dict = field(default_factory=dict, compare=False, repr=False)
+
+    # ---------------------------------------------------------- look-ups
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_memo"] = {}
+        return state
+
+    def entity(self, name: str) -> Entity:
+        try:
+            return self.entities[name.lower()]
+        except KeyError:
+            raise SchemaError(f"no entity {name!r} in schema {self.name}") from None
+
+    def all_supertypes(self, name: str) -> list:
+        """Every supertype of ``name`` once, depth-first in SUBTYPE OF order
+        (a supertype's own supertypes come right after it)."""
+        key = ("sup", name.lower())
+        memo = self._memo
+        if key not in memo:
+            out: list = []
+            seen: set = set()
+
+            def walk(ent: Entity) -> None:
+                for s in ent.supertypes:
+                    if s in seen:
+                        continue
+                    seen.add(s)
+                    out.append(s)
+                    walk(self._sup(ent, s))
+
+            walk(self.entity(name))
+            memo[key] = out
+        return list(memo[key])
+
+    def all_subtypes(self, name: str) -> list:
+        """Every (direct or indirect) subtype of ``name`` once, depth-first."""
+        out: list = []
+        seen: set = set()
+
+        def walk(ent: Entity) -> None:
+            for s in ent.subtypes:
+                if s not in seen:
+                    seen.add(s)
+                    out.append(s)
+                    walk(self.entities[s])
+
+        walk(self.entity(name))
+        return out
+
+    def is_subtype(self, a: str, b: str, proper: bool = False) -> bool:
+        """True when entity ``a`` is ``b`` or one of its (indirect) subtypes;
+        with ``proper=True`` ``a == b`` gives False."""
+        a, b = a.lower(), b.lower()
+        self.entity(a)
+        self.entity(b)
+        if a == b:
+            return not proper
+        return b in self.all_supertypes(a)
+
+    def _sup(self, ent: Entity, s: str) -> Entity:
+        try:
+            return self.entities[s]
+        except KeyError:
+            raise SchemaError(f"entity {ent.name} (line {ent.line}) is a SUBTYPE OF "
+                              f"undeclared entity {s!r}") from None
+
+    def resolve_attribute(self, entity: str, attr: str):
+        """The (declaring entity, declaration) of the attribute ``attr`` as
+        seen from ``entity``: follows ``SELF\\x.attr`` redeclarations back
+        to the original declaration. Returns None when not found."""
+        ent = self.entity(entity)
+        attr = attr.lower()
+        for a in (*ent.attributes, *ent.derived, *ent.inverse):
+            if a.supertype is None and a.name == attr:
+                return ent.name, a
+        for a in (*ent.attributes, *ent.derived, *ent.inverse):
+            if a.supertype is not None and a.local_name == attr:
+                return self.resolve_attribute(a.supertype, a.name)
+        for s in ent.supertypes:
+            r = self.resolve_attribute(self._sup(ent, s).name, attr)
+            if r is not None:
+                return r
+        return None
+
+    def p21_attributes(self, name: str) -> list:
+        """The ordered slots of a Part 21 simple instance of entity ``name``.
+
+        Supertypes' explicit attributes come first (depth-first in SUBTYPE
+        OF order, each supertype once), then the entity's own explicit
+        attributes in declaration order. Redeclarations ``SELF\\x.a`` do not
+        add slots; they change the type of the original slot, and a DERIVE
+        redeclaration in the entity or one of its supertypes marks the slot
+        ``derived`` (encoded ``*`` in Part 21)."""
+        key = ("p21", name.lower())
+        memo = self._memo
+        if key not in memo:
+            memo[key] = self._p21(name.lower())
+        return [P21Attribute(a.name, a.entity, a.type, a.optional, a.derived, a.derived_in,
+                             a.renamed) for a in memo[key]]
+
+    def _p21(self, name: str) -> list:
+        ent = self.entity(name)
+        chain = [name, *self.all_supertypes(name)]
+        # order: supertypes first (depth-first), then own
+        order: list = []
+        seen: set = set()
+
+        def walk(e: Entity) -> None:
+            for s in e.supertypes:
+                if s not in seen:
+                    seen.add(s)
+                    walk(self._sup(e, s))
+            for a in e.attributes:
+                if a.supertype is None:
+                    order.append((e.name, a))
+
+        walk(ent)
+        # redeclarations visible from `name`: the most specific one wins
+        # (chain lists the entity first, then supertypes depth-first, so an
+        # entity is always met before its own supertypes)
+        retyped: dict = {}
+        derived_in: dict = {}
+        renamed: dict = {}
+        for en in chain:
+            e = self.entities[en]
+            for a in e.attributes:
+                if a.supertype is not None:
+                    r = self.resolve_attribute(a.supertype, a.name)
+                    if r is not None:
+                        k = (r[0], r[1].name)
+                        retyped.setdefault(k, a)
+                        if a.renamed:
+                            renamed.setdefault(k, a.renamed)
+            for a in e.derived:
+                if a.supertype is not None:
+                    r = self.resolve_attribute(a.supertype, a.name)
+                    if r is not None:
+                        k = (r[0], r[1].name)
+                        derived_in.setdefault(k, en)
+                        if a.renamed:
+                            renamed.setdefault(k, a.renamed)
+        out = []
+        for owner, a in order:
+            k = (owner, a.name)
+            eff = retyped.get(k, a)
+            d = derived_in.get(k)
+            out.append(P21Attribute(a.name, owner, eff.type, eff.optional, d is not None, d,
+                                    renamed.get(k)))
+        return out
+
+    def explicit_attribute_names(self, name: str) -> list:
+        """Convenience: names of p21_attributes, derived slots prefixed ``*``."""
+        return [str(a) for a in self.p21_attributes(name)]
