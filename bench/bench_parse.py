@@ -59,7 +59,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 RESULT_MARKER = "@@BENCH-RESULT@@ "
 NAMES_FILE = "kinematics_entity_names_union.txt"
-SMALL_EXAMPLE = REPO / "examples" / "revolute_ap242.stp"
+SMALL_EXAMPLE = REPO / "examples" / "four_bar_ap242.stp"
 MB = 1e6  # throughput and sizes are in MB = 10^6 bytes
 
 KINDS = ("index", "index+kin", "parse-json", "occt", "naive")
@@ -820,7 +820,7 @@ KIND_NOTES = {
     "parse-json": ("`python -m p105cli parse FILE -o OUT.json`, timed from outside: interpreter start-up, "
                    "imports, indexing, decoding every instance and writing the JSON are all included. "
                    "Peak RSS is that of the CLI process (see *How measured*); *growth MB\\** is over the "
-                   "peak RSS of the same CLI parsing the small `examples/revolute_ap242.stp`."),
+                   "peak RSS of the same CLI parsing the small `examples/four_bar_ap242.stp`."),
     "occt": ("`STEPControl_Reader().ReadFile(path)` via cadquery-ocp: only `ReadFile` is timed (the `OCP` "
              "import, ~250 MB of shared libraries, is excluded from time and growth), and no shape transfer "
              "is done. *instances* is `StepModel().NbEntities()`."),

@@ -64,3 +64,49 @@ def corpus_files() -> list[Path]:
 def tmp_cwd(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     return tmp_path
+
+
+# ---------------------------------------------------------------- hostile input helpers
+# (added for test_hostile.py / test_roundtrip_props.py / fuzz_reader.py)
+
+import re as _re
+
+# A diagnostic that says where: FILE:LINE:COL: (text position), FILE: #id: (instance),
+# FILE:/json/pointer: (JSON model) or FILE:line N/pointer: (JSON Lines stream).
+LOCATED = _re.compile(r"^p105: error: \S*?:(\d+:\d+|/[^ ]*|line \d+[^ ]*|)(?:: | #\d+: )", _re.M)
+
+
+def clean_exit(proc, code: int) -> str:
+    """Assert the exit code and a traceback-free stderr; return stderr as text."""
+    err = proc.stderr.decode("utf-8", "replace")
+    assert "Traceback" not in err, err[-3000:]
+    assert proc.returncode == code, f"exit {proc.returncode}, expected {code}: {err[-3000:]}"
+    return err
+
+
+def clean_error(proc, *needles: str) -> str:
+    """Assert exit 2 with exactly one error line on stderr mentioning every needle."""
+    err = clean_exit(proc, 2)
+    lines = [ln for ln in err.splitlines() if ln.startswith("p105: error:")]
+    assert len(lines) == 1, err[-3000:]
+    for needle in needles:
+        assert needle in lines[0], f"{needle!r} not in {lines[0]!r}"
+    return lines[0]
+
+
+def line_col_of(text: str, offset: int) -> str:
+    """``LINE:COL`` (1-based) of a character offset, as diagnostics write it."""
+    line = text.count("\n", 0, offset) + 1
+    return f"{line}:{offset - (text.rfind(chr(10), 0, offset) + 1) + 1}"
+
+
+def read_all(text: str, source: str = "<input>"):
+    """read_step + records(): the whole reading path, in process."""
+    from p105cli.step import read_step
+    sf = read_step(text, source)
+    return sf, list(sf.records())
+
+
+def same_records(a: list, b: list) -> bool:
+    """Type-exact comparison of two record lists (see same_value)."""
+    return len(a) == len(b) and all(same_value(x, y) for x, y in zip(a, b))

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import io
-import json
 import os
 import signal
 import subprocess
@@ -17,7 +15,7 @@ from p105cli.cli import SUBCOMMANDS, main
 from p105cli.cli.contract import ExitCode
 
 COMMANDS = sorted(SUBCOMMANDS)
-EXAMPLE = EXAMPLES / "revolute_ap242.stp"
+EXAMPLE = EXAMPLES / "four_bar_ap242.stp"
 # Arguments that make each subcommand do its main job on EXAMPLE.
 JOB = {"parse": ["parse"], "export": ["export", "--to", "p21"]}
 

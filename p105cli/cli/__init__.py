@@ -83,9 +83,10 @@ def main(argv: list[str] | None = None) -> int:
     from p105cli.step.errors import StepError
     Settings.verbosity = 0
     try:
-        cli.main(args=argv, prog_name="p105", standalone_mode=False)
+        # Without standalone mode click returns a click.exceptions.Exit's code instead of raising it.
+        rv = cli.main(args=argv, prog_name="p105", standalone_mode=False)
         sys.stdout.flush()
-        return ExitCode.OK
+        return rv if isinstance(rv, int) else ExitCode.OK
     except click.exceptions.Exit as stop:
         return stop.exit_code
     except InputError as err:

@@ -100,7 +100,15 @@ def load_document(path: str | None):
     raw, source = read_input_bytes(path)
     text = decode_bytes(raw)
     del raw
-    doc = read_any(text, source)
+    try:
+        doc = read_any(text, source)
+    except RecursionError:
+        # Only the json module's C decoder recurses (the Part 21 reader and the
+        # model checks are iterative): a JSON text nested deeper than it can go.
+        from p105cli.step import ModelError
+        err = ModelError("JSON nested too deeply")
+        err.source = source
+        raise err from None
     return doc
 
 
@@ -191,9 +199,24 @@ def report_warnings(doc) -> None:
     """Print the reader's warnings and dangling references of ``doc`` on stderr."""
     from p105cli.step.checks import dangling_references
     text = getattr(doc, "text", None)
-    for message, offset in getattr(doc, "warnings", ()):
-        if text is not None:
-            line, col = doc.line_col(offset)
+    warnings = getattr(doc, "warnings", ())
+    if text is not None and warnings:
+        # Lines counted once for all warnings: a file with a warning on each of
+        # its 100 000 lines must not be rescanned from the start for each one.
+        where = {}
+        line, line_start, at = 1, 0, 0
+        for offset in sorted({max(0, min(off, len(text))) for _, off in warnings}):
+            line += text.count("\n", at, offset)
+            nl = text.rfind("\n", at, offset)
+            if nl >= 0:
+                line_start = nl + 1
+            where[offset] = (line, offset - line_start + 1)
+            at = offset
+        for message, offset in warnings:
+            line, col = where[max(0, min(offset, len(text)))]
             diag("warning", f"{doc.source}:{line}:{col}: {message}")
+    dropped = getattr(doc, "warnings_dropped", 0)
+    if dropped:
+        diag("warning", f"{doc.source}: {dropped} more warnings like these not shown")
     for referrer, missing in dangling_references(doc):
         diag("warning", f"{doc.source}: #{referrer}: reference to #{missing}, which is not in the file")

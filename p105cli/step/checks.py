@@ -5,8 +5,17 @@ from __future__ import annotations
 import bisect
 import re
 
+from .lexer import decode_int
+
 # Strings and comments are matched first so that '#12' inside them is not a reference.
 _REF_SCAN = re.compile(r"'[^']*'|/\*.*?\*/|#([0-9]+)", re.S)
+
+
+def _ref_id(digits: str) -> int:
+    try:
+        return int(digits)
+    except ValueError:
+        return decode_int(digits, 0)
 
 
 def _refs_in_value(value, out: list) -> None:
@@ -43,17 +52,23 @@ def dangling_references(doc) -> list[tuple[int, int]]:
     if not len(index):
         return []
     lo, hi = index.starts[0], index.ends[len(index) - 1]
-    referenced = {int(g) for g in _REF_SCAN.findall(text, lo, hi) if g}
-    missing = sorted(i for i in referenced if index.slot(i) < 0)
+    try:
+        referenced = {int(g) for g in _REF_SCAN.findall(text, lo, hi) if g}
+    except ValueError:  # a name with thousands of digits (leading zeros, or an undecoded file)
+        referenced = {_ref_id(g) for g in _REF_SCAN.findall(text, lo, hi) if g}
+    missing = {i for i in referenced if index.slot(i) < 0}
     if not missing:
         return []
+    # One more pass to find who refers to each missing id (one pass per missing
+    # id would take quadratic time on a file full of dangling references).
     found = []
-    starts = index.starts
-    for m in missing:
-        for hit in re.finditer(rf"'[^']*'|/\*.*?\*/|(#{m})(?![0-9])", text[lo:hi], re.S):
-            if hit.group(1):
-                k = bisect.bisect_right(starts, lo + hit.start(1)) - 1
-                found.append((index.ids[k], m))
+    starts, ids = index.starts, index.ids
+    for hit in _REF_SCAN.finditer(text, lo, hi):
+        g = hit.group(1)
+        if g and _ref_id(g) in missing:
+            k = bisect.bisect_right(starts, hit.start(1)) - 1
+            found.append((ids[k], _ref_id(g)))
     found = list(dict.fromkeys(found))
-    found.sort(key=lambda p: index.slot(p[0]))
+    # Instances in file order, and each one's missing ids in increasing order.
+    found.sort(key=lambda p: (index.slot(p[0]), p[1]))
     return found

@@ -24,12 +24,26 @@ from .lexer import Tokens
 _SKIP = r"(?:[ \t\r\n]++|/\*(?:[^*]++|\*(?!/))*+\*/)*+"
 # The body up to the terminating ';', stepping over strings and comments,
 # which may contain ';'. Possessive quantifiers: no backtracking, linear time.
-_BODY = r"[^;'/]*+(?:(?:'[^']*+'|/\*(?:[^*]++|\*(?!/))*+\*/|/)[^;'/]*+)*+"
+# A '/' that opens no closed comment ends the fast match (the careful
+# tokenizer then reports the unterminated comment): read as a lone '/',
+# every further '/*' would rescan the rest of the text, quadratic time.
+_BODY = r"[^;'/]*+(?:(?:'[^']*+'|/\*(?:[^*]++|\*(?!/))*+\*/|/(?!\*))[^;'/]*+)*+"
 _INSTANCE = re.compile(
     _SKIP + r"\#([0-9]+)[ \t\r\n]*=[ \t\r\n]*(?:([A-Za-z_!][A-Za-z0-9_]*)|\()" + _BODY + ";"
 )
 _SKIP_RE = re.compile(_SKIP)
-_ENDSEC = re.compile(r"ENDSEC[ \t\r\n]*;", re.I)
+_ENDSEC = re.compile(r"ENDSEC" + _SKIP + ";", re.I)
+# Instance names are stored in signed 64-bit arrays.
+MAX_INSTANCE_ID = 2**63 - 1
+
+
+def _instance_id(digits: str, offset: int) -> int:
+    """The instance name of ``#digits`` at ``offset``; a syntax error if too large."""
+    significant = digits.lstrip("0") or "0"
+    if len(significant) <= 19 and int(significant) <= MAX_INSTANCE_ID:
+        return int(significant)
+    raise StepSyntaxError(f"instance name #{digits[:30]}{'...' if len(digits) > 30 else ''} "
+                          f"is too large (at most #{MAX_INSTANCE_ID})", offset)
 
 
 class InstanceIndex:
@@ -88,7 +102,7 @@ def _careful_instance(text: str, pos: int, end: int):
     if kind != "ref":
         shown = "end of input" if kind == "eof" else repr(lex)
         raise StepSyntaxError(f"expected an instance '#n = ...;' or ENDSEC, found {shown}", at)
-    start, iid = at, int(lex[1:])
+    start, iid = at, _instance_id(lex[1:], at)
     tokens.expect("=", "'=' after the instance name")
     kind, lex, kat = tokens.next()
     if kind == "keyword":
@@ -128,7 +142,10 @@ def index_data_section(text: str, pos: int, end: int, into: InstanceIndex) -> in
             name = lower.get(raw)
             if name is None and raw is not None:
                 name = lower[raw] = raw.lower()
-            ids.append(int(m.group(1)))
+            try:
+                ids.append(int(m.group(1)))
+            except (OverflowError, ValueError):
+                ids.append(_instance_id(m.group(1), m.start(1) - 1))  # or a syntax error
             starts.append(m.start(1) - 1)
             ends.append(m.end())
             types.append(name)
@@ -140,6 +157,8 @@ def index_data_section(text: str, pos: int, end: int, into: InstanceIndex) -> in
             return e.end()
         if pos >= end:
             raise StepSyntaxError("DATA section is not closed by ENDSEC;", pos)
+        if text[pos:pos + 6].upper() == "ENDSEC":  # but not followed by ';'
+            Tokens(text, pos + 6, end).expect(";", "';' after ENDSEC")
         iid, etype, s, pos = _careful_instance(text, pos, end)
         ids.append(iid)
         starts.append(s)

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 
-from .errors import StepSyntaxError
+from .errors import ModelError, StepSyntaxError
 
 # Lists nested deeper than this are refused: no real schema nests more than a
 # handful of levels, and the limit keeps every later recursive consumer
@@ -167,6 +168,7 @@ def decode_string(lexeme: str, offset: int = 0, warn=None) -> str:
 
 _NEEDS_ESCAPE = re.compile(r"[^\x20-\x7e]|['\\]")
 _ESCAPE_PIECE = re.compile(r"[^\x00-\x7f]+|[\x00-\x1f\x7f]|'|\\")
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def _escape_piece(m: re.Match) -> str:
@@ -177,6 +179,9 @@ def _escape_piece(m: re.Match) -> str:
         return "\\\\"
     if len(piece) == 1 and ord(piece) < 0x80:
         return f"\\X\\{ord(piece):02X}"
+    if _SURROGATE.search(piece) is not None:
+        # No escape can carry it: \X2\ would write text that no reader accepts.
+        raise ModelError("string holds an unpaired surrogate: it cannot be written to Part 21")
     if max(piece) <= "\uffff":
         return "\\X2\\" + "".join(f"{ord(c):04X}" for c in piece) + "\\X0\\"
     return "\\X4\\" + "".join(f"{ord(c):08X}" for c in piece) + "\\X0\\"
@@ -190,6 +195,22 @@ def encode_string(s: str) -> str:
 
 
 # ---------------------------------------------------------------- numbers
+
+def decode_int(lexeme: str, offset: int) -> int:
+    """An integer (or the digits of an instance name) of any size up to the
+    interpreter's limit on decimal conversion (``sys.get_int_max_str_digits``,
+    4300 digits by default): converting longer ones takes quadratic time, and
+    neither ``json`` nor ``str(int)`` would write them back."""
+    try:
+        return int(lexeme)
+    except ValueError:
+        pass
+    digits = lexeme.lstrip("+-").lstrip("0") or "0"  # leading zeros count against the limit
+    if len(digits) <= sys.get_int_max_str_digits():
+        return -int(digits) if lexeme.startswith("-") else int(digits)
+    raise StepSyntaxError(f"integer of {len(digits)} digits is too long "
+                          f"(at most {sys.get_int_max_str_digits()})", offset)
+
 
 def decode_real(lexeme: str, offset: int) -> float:
     value = float(lexeme)
@@ -222,7 +243,6 @@ def parse_parameters(tokens: Tokens, warn=None) -> list:
     the interpreter's stack; nesting beyond MAX_NESTING is an error.
     """
     open_at = tokens.expect("(", "'('")
-    text = tokens.text
     # A frame is [items, typed-parameter name or None, offset of its '('].
     stack = [[[], None, open_at]]
     expect_value = True  # after '(' or ','
@@ -235,13 +255,19 @@ def parse_parameters(tokens: Tokens, warn=None) -> list:
                 expect_value = False
             else:
                 if kind == "int":
-                    value = int(lex)
+                    try:
+                        value = int(lex)
+                    except ValueError:
+                        value = decode_int(lex, at)  # leading zeros, or a syntax error
                 elif kind == "real":
                     value = decode_real(lex, at)
                 elif kind == "string":
                     value = decode_string(lex, at, warn)
                 elif kind == "ref":
-                    value = {"ref": int(lex[1:])}
+                    try:
+                        value = {"ref": int(lex[1:])}
+                    except ValueError:
+                        value = {"ref": decode_int(lex[1:], at + 1)}
                 elif kind == "enum":
                     value = {"enum": lex[1:-1].upper()}
                 elif kind == "binary":
@@ -293,7 +319,7 @@ def parse_instance_body(text: str, start: int, end: int, warn=None) -> dict:
     kind, lex, at = tokens.next()
     if kind != "ref":
         raise StepSyntaxError("expected an instance name #n", at)
-    record: dict = {"id": int(lex[1:])}
+    record: dict = {"id": decode_int(lex[1:], at + 1)}
     tokens.expect("=", "'=' after the instance name")
     kind, lex, at = tokens.next()
     if kind == "keyword":

@@ -12,14 +12,16 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from .errors import StepError, StepStructureError, StepSyntaxError
-from .index import InstanceIndex, _SKIP_RE, index_data_section
+from .errors import StepError, StepSyntaxError
+from .index import _SKIP, InstanceIndex, _SKIP_RE, index_data_section
 from .lexer import Tokens, parse_instance_body, parse_parameters
 
 MAGIC = "ISO-10303-21"
+MAX_WARNINGS = 1000  # kept per file; the rest are counted in StepFile.warnings_dropped
 _FRAME_WORD = re.compile(r"(ISO-10303-21|END-ISO-10303-21|HEADER|DATA|ANCHOR|REFERENCE|SIGNATURE|ENDSEC)\b", re.I)
 # Raw body of a section kept verbatim, up to its ENDSEC; strings and comments may hold anything.
-_RAW_SECTION = re.compile(r"(?:[^'/E]++|'[^']*+'|/\*.*?\*/|/|E(?!NDSEC[ \t\r\n]*;))*+", re.S)
+# An unterminated comment stops the match (as a lone '/', each later '/*' would rescan the rest).
+_RAW_SECTION = re.compile(r"(?:[^'/E]++|'[^']*+'|/\*.*?\*/|/(?!\*)|E(?!NDSEC" + _SKIP + r";))*+", re.S)
 
 HEADER_FIELDS = {
     "file_description": ("description", "implementation_level"),
@@ -77,9 +79,15 @@ class StepFile:
     index: InstanceIndex
     other_sections: list[dict] = field(default_factory=list)
     warnings: list[tuple[str, int]] = field(default_factory=list)
+    # Warnings beyond MAX_WARNINGS are only counted: a 100 MB string of
+    # stray backslashes must not need gigabytes of warning records.
+    warnings_dropped: int = 0
 
     def _warn(self, message: str, offset: int) -> None:
-        self.warnings.append((message, offset))
+        if len(self.warnings) < MAX_WARNINGS:
+            self.warnings.append((message, offset))
+        else:
+            self.warnings_dropped += 1
 
     def __len__(self) -> int:
         return len(self.index)
@@ -171,9 +179,14 @@ def _semicolon(text: str, pos: int, after: str) -> int:
 
 def _read(text: str, source: str) -> StepFile:
     warnings: list[tuple[str, int]] = []
+    dropped = 0
 
     def warn(message, offset):
-        warnings.append((message, offset))
+        nonlocal dropped
+        if len(warnings) < MAX_WARNINGS:
+            warnings.append((message, offset))
+        else:
+            dropped += 1
 
     pos = _skip(text, 0)
     if text[pos:pos + len(MAGIC)].upper() != MAGIC:
@@ -209,6 +222,10 @@ def _read(text: str, source: str) -> StepFile:
             body_start = _semicolon(text, after, word)
             m = _RAW_SECTION.match(text, body_start)
             if not text.startswith("ENDSEC", m.end()):
+                if text.startswith("/*", m.end()):
+                    raise StepSyntaxError("unterminated comment", m.end())
+                if text.startswith("'", m.end()):
+                    raise StepSyntaxError("unterminated string", m.end())
                 raise StepSyntaxError(f"{word} section is not closed by ENDSEC;", body_start)
             other.append({"keyword": word, "after_data": len(sections), "text": text[body_start:m.end()]})
             pos = _semicolon(text, m.end() + len("ENDSEC"), "ENDSEC")
@@ -231,4 +248,4 @@ def _read(text: str, source: str) -> StepFile:
     if rest < len(text):
         warn("text after END-ISO-10303-21; ignored", rest)
     index.finish()
-    return StepFile(text, source, header_to_json(entities), sections, index, other, warnings)
+    return StepFile(text, source, header_to_json(entities), sections, index, other, warnings, dropped)

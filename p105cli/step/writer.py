@@ -10,8 +10,8 @@ included) is changed behind the user's back.
 from __future__ import annotations
 
 from .errors import ModelError
-from .lexer import encode_real, encode_string
-from .reader import header_from_json
+from .lexer import _SURROGATE, encode_real, encode_string
+from .reader import _RAW_SECTION, header_from_json
 
 
 def _value(v, out: list) -> None:
@@ -72,9 +72,20 @@ def instance_text(record: dict) -> str:
     return f"#{record['id']}={record['type'].upper()}{_parameters(record['args'])};"
 
 
+def _check_other_section(extra: dict) -> None:
+    """Refuse verbatim section text that would not read back as that section."""
+    text = extra["text"]
+    m = _RAW_SECTION.match(text)
+    if m.end() != len(text) or _SURROGATE.search(text) is not None:
+        raise ModelError(f"{extra['keyword']} section text cannot be written to Part 21 as it is "
+                         "(an unterminated string or comment, an ENDSEC; or an unpaired surrogate)")
+
+
 def write_step(doc, fh) -> None:
     """Write a document (``StepFile`` or ``JsonDocument``) to a text stream."""
     write = fh.write
+    for extra in doc.other_sections:
+        _check_other_section(extra)
     write("ISO-10303-21;\nHEADER;\n")
     for etype, args in header_from_json(doc.header):
         write(f"{etype.upper()}{_parameters(args)};\n")
