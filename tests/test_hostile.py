@@ -6,9 +6,7 @@ ever enters the model silently. Cases go through the CLI in a subprocess
 with a timeout, so a hang fails the test instead of the run; a few exhaustive
 sweeps (every truncation point) also run in process, where they are cheap.
 
-xfail(strict=True) marks hostile JSON that still crashes in jsonmodel.py
-(outside the files this suite's author could change); each one names the
-function to fix, and starts failing (XPASS) once it is fixed.
+hostile JSON models are clean errors too (jsonmodel.py).
 """
 
 from __future__ import annotations
@@ -559,9 +557,6 @@ def test_json_nesting_beyond_the_model_limit():
     error_line(export(rec(deep)), "nested deeper than 200", "/data/0/args/0")
 
 
-@pytest.mark.xfail(strict=True, reason="jsonmodel.check_value counts typed parameters in the depth "
-                   "but checks it on lists only: 250 nested typed parameters are accepted, and the "
-                   "Part 21 written from them does not read back")
 def test_json_typed_parameter_nesting_beyond_the_model_limit():
     typed = 1
     for _ in range(250):
@@ -604,15 +599,11 @@ def test_json_lone_surrogate_in_file_schema_to_p21():
     clean_error(export(text, "p21"), "surrogate")
 
 
-@pytest.mark.xfail(strict=True, reason="jsonmodel: file_schema and other_sections text are not "
-                   "checked for lone surrogates; write_json then fails to encode (exit 3)")
 def test_json_lone_surrogate_in_file_schema_to_json():
     text = '{"format":"p105/1","header":{"file_schema":["\\ud800"]},"data":[]}'
     clean_error(export(text, "json"), "surrogate")
 
 
-@pytest.mark.xfail(strict=True, reason="jsonmodel: other_sections text is not checked for lone "
-                   "surrogates; write_json then fails to encode (exit 3)")
 def test_json_lone_surrogate_in_other_section_text_to_json():
     text = ('{"format":"p105/1","header":{},"data":[],'
             '"other_sections":[{"keyword":"ANCHOR","after_data":0,"text":"\\ud800"}]}')
@@ -620,10 +611,13 @@ def test_json_lone_surrogate_in_other_section_text_to_json():
 
 
 def test_json_other_section_text_that_cannot_be_written_to_p21():
-    for text in ("\ud800", "<a>=#1;\nENDSEC;", "'unterminated", "/* unterminated"):
+    for text, message in (("\ud800", "unpaired surrogate"),
+                          ("<a>=#1;\nENDSEC;", "ANCHOR section text cannot be written"),
+                          ("'unterminated", "ANCHOR section text cannot be written"),
+                          ("/* unterminated", "ANCHOR section text cannot be written")):
         doc = frame(data_sections=[{"parameters": None, "count": 0}],
                     other_sections=[{"keyword": "ANCHOR", "after_data": 1, "text": text}])
-        clean_error(export(json.dumps(doc), "p21"), "ANCHOR section text cannot be written")
+        clean_error(export(json.dumps(doc), "p21"), message)
 
 
 BAD_SHAPES = [
@@ -679,8 +673,6 @@ def test_json_wrong_shapes_are_clean_errors(text, needle):
     clean_error(export(text), needle)
 
 
-@pytest.mark.xfail(strict=True, reason="jsonmodel._check_header / _check_frame iterate header.other and "
-                   "other_sections without checking that they are lists: TypeError (exit 3)")
 @pytest.mark.parametrize("text", [
     '{"format":"p105/1","header":{"other":5},"data":[]}',
     '{"format":"p105/1","header":{},"data":[],"other_sections":5}',

@@ -192,6 +192,9 @@ def check_value(value, where: str) -> None:
             elif keys == {"type", "value"}:
                 if type(v["type"]) is not str or not _KEYWORD.match(v["type"]):
                     raise ModelError("typed parameter needs a type name", path)
+                # Typed parameters nest like lists in the Part 21 grammar, so they count too.
+                if depth >= MAX_NESTING:
+                    raise ModelError(f"values nested deeper than {MAX_NESTING} levels", path)
                 stack.append((v["value"], f"{path}/value", depth + 1))
             else:
                 raise ModelError(f"unknown value object with keys {sorted(keys)}", path)
@@ -244,7 +247,11 @@ def _check_header(header, where: str = "/header") -> dict:
         fs = header["file_schema"]
         if type(fs) is not list or not all(type(s) is str for s in fs):
             raise ModelError("file_schema must be a list of strings", f"{where}/file_schema")
-    for i, entry in enumerate(header.get("other", [])):
+        check_value(fs, f"{where}/file_schema")
+    other = header.get("other", [])
+    if type(other) is not list:
+        raise ModelError("other must be a list of header entities", f"{where}/other")
+    for i, entry in enumerate(other):
         if type(entry) is not dict or set(entry) != {"type", "args"}:
             raise ModelError("header entity needs type and args", f"{where}/other/{i}")
         _check_typed(entry, f"{where}/other/{i}")
@@ -276,11 +283,16 @@ def _check_frame(frame: dict, count: int) -> tuple[dict, list[DataSection], list
             raise ModelError(f"data_sections count {sum(s.count for s in sections)} instances, data has {count}",
                              "/data_sections")
     other = frame.get("other_sections", [])
+    if type(other) is not list:
+        raise ModelError("other_sections must be a list", "/other_sections")
     for i, s in enumerate(other):
         if (type(s) is not dict or set(s) != {"keyword", "after_data", "text"}
                 or s["keyword"] not in ("ANCHOR", "REFERENCE", "SIGNATURE")
                 or type(s["after_data"]) is not int or type(s["text"]) is not str):
             raise ModelError("other section needs keyword, after_data and text", f"/other_sections/{i}")
+        if not 0 <= s["after_data"] <= len(sections):
+            raise ModelError(f"after_data must be between 0 and {len(sections)}", f"/other_sections/{i}")
+        check_value(s["text"], f"/other_sections/{i}/text")
     known = {"format", "stream", "header", "data", "data_sections", "other_sections"}
     extra = set(frame) - known
     if extra:
@@ -300,7 +312,7 @@ def _check_ids(data: list[dict]) -> None:
 def read_json(text: str, source: str = "<input>") -> JsonDocument:
     """Read a p105/1 document or stream, checking it fully."""
     try:
-        return _read_json(text)
+        return _read_json(text, source)
     except ModelError as err:
         err.source = source
         raise
@@ -318,7 +330,7 @@ def _loads(text: str, line_offset: int = 0):
         raise ModelError(f"invalid JSON: {msg}", f"{lineno}:{col}") from None
 
 
-def _read_json(text: str) -> JsonDocument:
+def _read_json(text: str, source: str) -> JsonDocument:
     first, _, rest = text.partition("\n")
     frame = None
     if first.strip().startswith("{"):
@@ -344,4 +356,4 @@ def _read_json(text: str) -> JsonDocument:
             check_record(record, f"/data/{i}")
     header, sections, other = _check_frame(frame, len(data))
     _check_ids(data)
-    return JsonDocument(header, sections, data, other)
+    return JsonDocument(header, sections, data, other, source)
