@@ -125,6 +125,45 @@ PAGES: dict[str, dict] = {
              ["diff <(p105 export a.stp) <(p105 export b.stp)"]),
         ],
     },
+    "validate": {
+        "operands": {
+            "inputs": "Part 21 files or p105/1 JSON models to check (sniffed). `-` or no operand "
+                      "reads standard input. All files are checked; the exit status is the worst.",
+        },
+        "stdin": [
+            "A Part 21 file or a p105/1 JSON model when FILES is `-` or omitted. The schema "
+            "profile (ap214, ap242 or p105) comes from FILE_SCHEMA unless `--schema` is given.",
+        ],
+        "stdout": [
+            "The report in the chosen format: text lines `FILE:LINE:COL: severity[RULE] message "
+            "(#id TYPE)` and a summary per file with the rule coverage (rules evaluated / "
+            "applicable); or JSON, JSON Lines, SARIF 2.1.0, JUnit XML, GitHub workflow commands "
+            "or GitLab Code Quality JSON. With `--pass`, the input itself, unchanged, when it "
+            "passes (the report then goes to standard error or to `-o`).",
+        ],
+        "examples": [
+            ("Check a file; exit status 1 when it has errors:",
+             ["p105 validate arm.stp"]),
+            ("Gate a pipeline: pass the file on only when it validates:",
+             ["p105 validate --pass arm.stp | p105 parse > arm.json"]),
+            ("GitHub Actions step (annotations appear on the pull request; -f auto picks "
+             "the github format when GITHUB_ACTIONS is set):",
+             ["- run: p105 validate models/*.stp",
+              "- run: p105 validate -f sarif -o p105.sarif models/*.stp --exit-zero"]),
+            ("GitLab CI job with a Code Quality report:",
+             ["validate:",
+              "  script: p105 validate -f gitlab -o gl-code-quality.json models/*.stp",
+              "  artifacts:",
+              "    reports:",
+              "      codequality: gl-code-quality.json"]),
+            ("JUnit XML for CI systems that show test reports:",
+             ["p105 validate -f junit -o p105-junit.xml models/*.stp"]),
+            ("Only the schema's WHERE rules of kinematic joints, failing on warnings too:",
+             ["p105 validate --select 'SCH-kinematic_joint.*' --fail-on warning arm.stp"]),
+            ("List every rule with its EXPRESS source:",
+             ["p105 validate --list-rules --schema ap214"]),
+        ],
+    },
 }
 
 # ---------------------------------------------------------------- roff escaping

@@ -18,6 +18,7 @@ from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, PipeClosed, Settin
 SUBCOMMANDS = {
     "parse": ("p105cli.cli.parse", "parse"),
     "export": ("p105cli.cli.export", "export"),
+    "validate": ("p105cli.cli.validate", "validate"),
 }
 
 VERSION_PACKAGES = ("click", "numpy", "scipy", "rich")

@@ -140,6 +140,14 @@ def open_output(path: str | None, inputs: tuple = ()):
             except (BrokenPipeError, ValueError):
                 pass
         return
+    if os.path.exists(path) and not os.path.isfile(path):
+        # /dev/null, /dev/stdout, a FIFO: nothing to replace atomically, write straight through.
+        try:
+            with open(path, "w", encoding="utf-8", newline="\n") as out:
+                yield out
+        except OSError as err:
+            raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
+        return
     for src in inputs:
         if src not in (None, "-") and os.path.exists(path) and os.path.exists(src) \
                 and os.path.samefile(src, path):
@@ -168,6 +176,22 @@ def open_output(path: str | None, inputs: tuple = ()):
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+def copy_to_stdout(data: bytes) -> None:
+    """Write ``data`` to stdout completely, by the file descriptor.
+
+    A large BufferedWriter.write to a pipe may return a short count instead of
+    raising when the reader goes away; os.write in a loop cannot lose bytes silently.
+    """
+    sys.stdout.flush()
+    fd = sys.stdout.fileno()
+    view = memoryview(data)
+    try:
+        while view:
+            view = view[os.write(fd, view[:1 << 20]):]
+    except BrokenPipeError:
+        raise PipeClosed() from None
 
 
 class Progress:
