@@ -765,3 +765,15 @@ def test_no_click_or_numpy_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=Path(__file__).resolve().parent.parent)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_compiled_package_schemas_are_used_before_the_user_cache(tmp_path, monkeypatch):
+    import p105cli.schema.express as express
+    monkeypatch.setattr(express, "COMPILED_DIR", tmp_path / "compiled")
+    monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "user"))
+    written = express.compile_package_schemas()
+    assert len(written) == 2 and all(p.parent == tmp_path / "compiled" for p in written)
+    data_dir = Path(express.__file__).resolve().parent / "data"
+    schema = express.load_schema(data_dir / "AP242_N10962_mim_lf.exp")
+    assert "revolute_pair" in schema.entities
+    assert not (tmp_path / "user").exists()      # served from the compiled form, nothing rebuilt

@@ -1168,8 +1168,13 @@ def cache_dir() -> Path:
     return Path(x) / "p105" if x else Path.home() / ".cache" / "p105"
 
 
-def _cache_path(digest: str) -> Path:
-    return cache_dir() / f"express-v{PARSER_VERSION}-{digest}.pickle"
+# Compiled at install time (`make install` runs `python -m p105cli.schema.express --compile`),
+# so a fresh install starts fast without writing to the user's cache.
+COMPILED_DIR = Path(__file__).resolve().parent / "data" / "compiled"
+
+
+def _cache_path(digest: str, directory: Path | None = None) -> Path:
+    return (directory or cache_dir()) / f"express-v{PARSER_VERSION}-{digest}.pickle"
 
 
 def load_schemas(path, cache: bool = True) -> list:
@@ -1185,11 +1190,14 @@ def load_schemas(path, cache: bool = True) -> list:
     if cache:
         digest = hashlib.sha256(data).hexdigest()
         cp = _cache_path(digest)
-        try:
-            with open(cp, "rb") as f:
-                blob = f.read()
-        except OSError:
-            blob = None
+        blob = None
+        for candidate in (_cache_path(digest, COMPILED_DIR), cp):
+            try:
+                with open(candidate, "rb") as f:
+                    blob = f.read()
+                break
+            except OSError:
+                continue
         if blob is not None:
             enabled = gc.isenabled()
             gc.disable()
@@ -1245,3 +1253,26 @@ def _write_cache(cp: Path, obj) -> None:
                 os.unlink(tmp)
             except OSError:
                 pass
+
+
+def compile_package_schemas() -> list[Path]:
+    """Parse the long forms shipped in the package and store them in COMPILED_DIR."""
+    written = []
+    for exp in sorted((Path(__file__).resolve().parent / "data").glob("*.exp")):
+        data = exp.read_bytes()
+        digest = hashlib.sha256(data).hexdigest()
+        schemas = parse_schemas(data.decode("utf-8", errors="replace"), str(exp))
+        target = _cache_path(digest, COMPILED_DIR)
+        _write_cache(target, (PARSER_VERSION, digest, schemas))
+        if not target.is_file():
+            raise OSError(f"could not write {target}")
+        written.append(target)
+    return written
+
+
+if __name__ == "__main__":
+    import sys as _sys
+    if _sys.argv[1:] != ["--compile"]:
+        _sys.exit("usage: python -m p105cli.schema.express --compile")
+    for _path in compile_package_schemas():
+        print(_path)
