@@ -10,7 +10,7 @@ STAMP   = $(VENV)/.installed
 SHARED ?= ../shared
 FUZZ_SECONDS ?= 120
 
-.PHONY: all install demo test test-all fuzz man bench bench-parse clean
+.PHONY: all install demo test test-all fuzz man bench bench-parse bench-validate clean
 
 all: test
 
@@ -48,11 +48,14 @@ fuzz: $(STAMP)
 man: $(STAMP)
 	$(PY) -m p105cli.manpages man
 
-bench: bench-parse
+bench: bench-parse bench-validate
 
 bench-parse: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
 	$(PY) bench/bench_parse.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks.md
+
+bench-validate: $(STAMP)
+	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-validate.md
 
 clean:
 	rm -rf build .pytest_cache .hypothesis

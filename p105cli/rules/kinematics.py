@@ -132,9 +132,6 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
-import numpy as np
-
-from ..kinematics.placements import build_axes, convert_spatial_to_ypr_rotation
 from .conformance import ERROR, WARNING, Finding
 
 __all__ = ["RULES", "KIN_ENTITIES", "ContextUnits", "check_kinematics", "context_units"]
@@ -838,6 +835,7 @@ def _ypr_of(k: _Kin, value, factor: Optional[float]) -> Optional[tuple]:
         if len(ratios) != 3 or None in ratios or angle is None:
             return None
         try:
+            from ..kinematics.placements import convert_spatial_to_ypr_rotation  # numpy only when needed
             ypr = convert_spatial_to_ypr_rotation(ratios, angle, factor)
         except ValueError:
             return None
@@ -1099,6 +1097,9 @@ def _nonzero(v) -> bool:
 
 
 def _check_axis2(k: _Kin, p) -> None:
+    import numpy as np  # imported here: validate of a file without placements never loads numpy
+
+    from ..kinematics.placements import build_axes
     loc = k.get_ref(p, "location")
     coords = _vector(k, loc, "coordinates") if loc is not None else None
     if coords is not None and not all(math.isfinite(x) for x in coords):
@@ -1135,6 +1136,7 @@ def _check_axis2(k: _Kin, p) -> None:
 
 
 def _check_cto3d(k: _Kin, p) -> None:
+    import numpy as np
     axes = {}
     for a in ("axis1", "axis2", "axis3"):
         d = k.get_ref(p, a)
