@@ -132,6 +132,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
+from ..step.values import refs_in as _refs_in
 from .conformance import ERROR, WARNING, Finding
 
 __all__ = ["RULES", "KIN_ENTITIES", "ContextUnits", "check_kinematics", "context_units"]
@@ -273,22 +274,6 @@ def _ref(v) -> Optional[int]:
         if type(r) is int:
             return r
     return None
-
-
-def _refs_in(v, out: list) -> list:
-    stack = [v]
-    while stack:
-        x = stack.pop()
-        tx = type(x)
-        if tx is list:
-            stack.extend(reversed(x))
-        elif tx is dict:
-            r = x.get("ref")
-            if r is not None:
-                out.append(r)
-            elif "value" in x:
-                stack.append(x["value"])
-    return out
 
 
 def _untyped(v):

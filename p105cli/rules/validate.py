@@ -24,6 +24,8 @@ import linecache
 from functools import lru_cache
 from pathlib import Path
 
+from p105cli.step.values import record_refs
+
 from .conformance import RULES as CONFORMANCE_RULES
 from .conformance import check_population
 from .diagnostics import NOT_EVALUATED, Diagnostic, RunResult, register_rule
@@ -47,19 +49,6 @@ def kinematic_entity_names() -> frozenset:
                      if line.strip())
 
 
-def _refs(value, out: list) -> None:
-    stack = [value]
-    while stack:
-        v = stack.pop()
-        if type(v) is list:
-            stack.extend(v)
-        elif type(v) is dict:
-            if "ref" in v:
-                out.append(v["ref"])
-            elif "value" in v:
-                stack.append(v["value"])
-
-
 def kinematic_closure(pop) -> list[int]:
     """Ids of the kinematic instances and everything they reference, in file order."""
     schema = pop.schema
@@ -70,11 +59,7 @@ def kinematic_closure(pop) -> list[int]:
     seen = set(seeds)
     todo = list(seeds)
     while todo:
-        record = pop.instance(todo.pop()).record
-        refs: list = []
-        for part in record.get("complex", [record]):
-            _refs(part["args"], refs)
-        for r in refs:
+        for r in record_refs(pop.instance(todo.pop()).record):
             if r not in seen and pop.types_of(r) is not None:
                 seen.add(r)
                 todo.append(r)

@@ -6,6 +6,7 @@ import bisect
 import re
 
 from .lexer import decode_int
+from .values import record_refs
 
 # Strings and comments are matched first so that '#12' inside them is not a reference.
 _REF_SCAN = re.compile(r"'[^']*'|/\*.*?\*/|#([0-9]+)", re.S)
@@ -16,20 +17,6 @@ def _ref_id(digits: str) -> int:
         return int(digits)
     except ValueError:
         return decode_int(digits, 0)
-
-
-def _refs_in_value(value, out: list) -> None:
-    stack = [value]
-    while stack:
-        v = stack.pop()
-        t = type(v)
-        if t is list:
-            stack.extend(v)
-        elif t is dict:
-            if "ref" in v:
-                out.append(v["ref"])
-            elif "value" in v:
-                stack.append(v["value"])
 
 
 def dangling_references(doc) -> list[tuple[int, int]]:
@@ -43,9 +30,7 @@ def dangling_references(doc) -> list[tuple[int, int]]:
         present = {r["id"] for r in doc.data}
         found = []
         for record in doc.data:
-            refs: list = []
-            for part in record.get("complex", [record]):
-                _refs_in_value(part["args"], refs)
+            refs = record_refs(record)
             found.extend((record["id"], m) for m in refs if m not in present)
         return found
     index = doc.index
