@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
-	$(PY) -m p105cli.schema.express --compile
+	$(PY) -m p105cli.schema.compile
 	touch $(STAMP)
 
 install: $(STAMP)

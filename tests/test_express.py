@@ -720,6 +720,7 @@ def test_kinematics_subsets_parse_as_bare_declarations(subset, full, request):
 def test_cache_roundtrip(tmp_path, monkeypatch, ap242):
     # Load times belong to the benchmarks, not to unit tests.
     monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr("p105cli.schema.express.COMPILED_DIR", tmp_path / "no-compiled")  # the user cache only
     cold = load_schema(AP242)
     files = list((tmp_path / "cache").iterdir())
     assert len(files) == 1 and files[0].name.startswith(f"express-v{PARSER_VERSION}-")
@@ -734,6 +735,7 @@ def test_cache_roundtrip(tmp_path, monkeypatch, ap242):
 
 def test_cache_key_and_corrupt_entry(tmp_path, monkeypatch):
     monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "c"))
+    monkeypatch.setattr("p105cli.schema.express.COMPILED_DIR", tmp_path / "no-compiled")  # the user cache only
     src = tmp_path / "s.exp"
     src.write_text(wrap("ENTITY a; x : INTEGER; END_ENTITY;"))
     s1 = load_schema(src)
@@ -752,6 +754,7 @@ def test_unwritable_cache_dir_is_not_an_error(tmp_path, monkeypatch):
     blocker = tmp_path / "file"
     blocker.write_text("x")
     monkeypatch.setenv("P105_CACHE_DIR", str(blocker / "sub"))
+    monkeypatch.setattr("p105cli.schema.express.COMPILED_DIR", tmp_path / "no-compiled")  # the user cache only
     src = tmp_path / "s.exp"
     src.write_text(wrap("ENTITY a; END_ENTITY;"))
     assert list(load_schema(src).entities) == ["a"]

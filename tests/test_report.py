@@ -269,6 +269,14 @@ def test_write_report_dispatches():
 
 # -- golden files and determinism ----------------------------------------------------------
 
+@pytest.fixture(autouse=True)
+def _default_rule_catalogue(monkeypatch):
+    """Rule descriptions as diagnostics.py alone defines them: other tests import
+    checkers that register more, and the golden files must not depend on test order."""
+    import p105cli.rules.diagnostics as diagnostics
+    monkeypatch.setattr(diagnostics, "_RULES", dict(diagnostics._DEFAULT_RULES))
+
+
 @pytest.mark.parametrize("fmt", list(FORMATS))
 def test_golden(fmt):
     path = GOLDEN / f"report.{EXTENSIONS[fmt]}"

@@ -326,12 +326,14 @@ class RunResult:
 
 # -- rule catalogue (for reports that describe their rules, e.g. SARIF) -------------------
 
-_RULES: dict[str, str] = {
+_DEFAULT_RULES: dict[str, str] = {
     "P21-SYNTAX": "The exchange structure is not valid ISO 10303-21 syntax.",
     "SCH-ARITY": "An entity instance has the wrong number of attributes for its EXPRESS type.",
     NOT_EVALUATED: "An EXPRESS rule that applies to the file was not evaluated by p105.",
     "KIN-UNITS": "Kinematic quantities lack consistent length or plane angle units.",
 }
+# Extended by register_rule() as checkers are imported (rules/validate.py registers its own).
+_RULES: dict[str, str] = dict(_DEFAULT_RULES)
 
 _PREFIXES = {
     "P21-": "ISO 10303-21 exchange structure check",

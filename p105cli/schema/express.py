@@ -1168,7 +1168,7 @@ def cache_dir() -> Path:
     return Path(x) / "p105" if x else Path.home() / ".cache" / "p105"
 
 
-# Compiled at install time (`make install` runs `python -m p105cli.schema.express --compile`),
+# Compiled at install time (`make install` runs `python -m p105cli.schema.compile`),
 # so a fresh install starts fast without writing to the user's cache.
 COMPILED_DIR = Path(__file__).resolve().parent / "data" / "compiled"
 
@@ -1269,10 +1269,3 @@ def compile_package_schemas() -> list[Path]:
         written.append(target)
     return written
 
-
-if __name__ == "__main__":
-    import sys as _sys
-    if _sys.argv[1:] != ["--compile"]:
-        _sys.exit("usage: python -m p105cli.schema.express --compile")
-    for _path in compile_package_schemas():
-        print(_path)
