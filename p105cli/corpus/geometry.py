@@ -102,21 +102,25 @@ def axis_angle(R) -> tuple[np.ndarray, float]:
 
 
 def pair_motion(kind: str, value: dict, params: dict, slide_axis: int = 2) -> np.ndarray:
-    """The motion ``M`` of a pair at ``value`` (radians and millimetres)."""
+    """The motion ``M`` of a pair at ``value`` (radians and millimetres).
+
+    The low pairs' motions are :mod:`p105cli.kinematics.pairs`' (one rule in
+    one place); ``slide_axis`` 2 is its "1996" layout, 0 its "ap242" layout.
+    """
+    from p105cli.kinematics import pairs
+
     if kind == "revolute":
-        return rot_z(value["rotation"])
+        return pairs.REVOLUTE.motion([value["rotation"]])
     if kind == "prismatic":
-        t = np.zeros(3)
-        t[slide_axis] = value["translation"]
-        return trans(*t)
+        layout = {2: "1996", 0: "ap242"}.get(slide_axis)
+        if layout is None:
+            raise ValueError("prismatic pairs slide along z (1996) or x (AP242)")
+        return pairs.PRISMATIC.motion([value["translation"]], layout=layout)
     if kind == "gear":
-        q1 = value["rotation_1"]
-        q2 = -params["gear_ratio"] * q1
-        return compose(rot_z(-q1), trans_x(params["radius_first"] + params["radius_second"]), rot_z(q2))
+        return pairs.GEAR.motion([value["rotation_1"]], radius_first_link=params["radius_first"],
+                                 radius_second_link=params["radius_second"], gear_ratio=params["gear_ratio"])
     if kind == "rack_and_pinion":
-        d = value["displacement"]
-        r = params["pinion_radius"]
-        return compose(trans_x(d), trans_y(r), rot_z(-d / r))
+        return pairs.RACK_AND_PINION.motion([value["displacement"]], pinion_radius=params["pinion_radius"])
     if kind == "point_on_planar_curve":
         c, rad = params["circle_center"], params["circle_radius"]
         u = value["parameter"]

@@ -1,0 +1,589 @@
+"""Pair motions of ISO 10303-105: ``M(q)``, its derivatives and twist Jacobians.
+
+Conventions (read these before using any function)
+---------------------------------------------------
+
+* ``M(q)`` is the placement of the second pair frame in the first pair frame
+  (``T_Pj_Pk``, the matrix the standard writes ``pPF_q`` between the pair
+  frames, 5.4.18 note 2; for low pairs the contact frame is the second pair
+  frame). For a pair whose frames are ``P1`` on link 1 (the first link) and
+  ``P2`` on link 2::
+
+      T_link1_link2(q) = P1 @ M(q) @ inverse(P2)
+
+  (:func:`link_transform`). This is the convention the corpus generator
+  asserts for every configuration it writes (:mod:`p105cli.corpus.geometry`).
+* Every function is vectorised: ``q`` has shape ``(..., n_values)`` (the pair's
+  values in the order of the attributes of its ``*_pair_value`` entity, see
+  :attr:`PairType.value_names`); parameters are scalars or arrays that
+  broadcast with ``q.shape[:-1]``; results are float64 with leading axes
+  ``q.shape[:-1]`` (broadcast with the parameters). Nothing loops in Python.
+* Angles (values and parameters) are radians, lengths in the file's length
+  unit. Converting a file's plane-angle unit is the caller's job
+  (:func:`p105cli.kinematics.placements.plane_angle_to_radian`).
+* Twists are 6-vectors ordered ``(v_x, v_y, v_z, w_x, w_y, w_z)``: linear
+  part first, then angular part.
+* :meth:`PairType.motion_jacobian` returns the **body** Jacobian by default:
+  column i is the twist ``vee(M^-1 dM/dq_i)``, i.e. the velocity of the
+  second pair frame relative to the first, expressed in the *second* pair
+  frame (origin velocity and angular velocity). ``frame="spatial"`` gives
+  ``vee(dM/dq_i M^-1)`` (expressed in the first pair frame, linear part the
+  velocity of the point of frame 2 passing through frame 1's origin). The
+  two are related by the adjoint of ``M`` (:func:`adjoint`).
+* :meth:`PairType.motion_derivative` gives ``dM/dq`` as ``(..., n, 4, 4)``
+  (``dM/dq_i = M @ hat(J_body[..., :, i])``).
+
+Pair motions (``q`` in the order given; [clause of ISO 10303-105:1996])
+----------------------------------------------------------------------
+
+=====================  =========================================  ==============================
+pair                   values ``q``                               ``M(q)``
+=====================  =========================================  ==============================
+revolute               (rotation,)                                ``Rz(rotation)``  [5.4.22]
+prismatic              (translation,)                             ``Tz(s)`` layout "1996" [Annex
+                                                                  F: "pure translation along z"];
+                                                                  ``Tx(s)`` layout "ap242" (its
+                                                                  prismatic_pair derives t_x =
+                                                                  TRUE, all other flags FALSE)
+screw                  (rotation,); param ``pitch``               ``Rz(th) Tz(pitch th / (2 pi))``
+                                                                  [Annex F; 5.4.29]
+cylindrical            (translation, rotation)                    ``Tz(s) Rz(th)`` [Annex F; AP242
+                                                                  flags t_z, r_z]
+spherical              (yaw, pitch, roll)                         ``ypr_rotation`` = ``Rx(roll)
+                                                                  Ry(pitch) Rz(yaw)`` [5.3.7,
+                                                                  Annex E; 5.4.35 derives the
+                                                                  ypr actual_orientation]
+universal              (first_rotation_angle,                     ``Rz(q1) Ry(-s) Rx(q2) Ry(s)``,
+                       second_rotation_angle); param              ``s`` = skew_angle [5.4.37]
+                       ``input_skew_angle`` (None -> 0)
+homokinetic            as universal (skew must be absent)         ``Rz(q1) Rx(q2) Rz(-q1)``
+planar                 (rotation, translation_x, translation_y)   ``Tx(x) Ty(y) Rz(th)``
+unconstrained          (tx, ty, tz, yaw, pitch, roll)             ``[ypr_rotation, (tx,ty,tz)]``
+fully_constrained      ()                                         identity
+gear                   (rotation_1,); params radius_first_link,   ``Rz(-q1) Tx(r1 + r2)
+                       radius_second_link, gear_ratio, bevel=0,   Rz(-gear_ratio q1)``
+                       helical_angle=0
+rack_and_pinion        (displacement,); param pinion_radius       ``Tx(d) Ty(r) Rz(-d / r)``
+=====================  =========================================  ==============================
+
+Where these come from, and what had to be chosen:
+
+* revolute (5.4.22): the rotation that turns the first pair frame about the
+  common z axis until its x axis coincides with the second frame's x axis;
+  positive counter-clockwise seen from +z (5.2.3).
+* prismatic: the 1996 text's Annex F (DH -> SU) calls the prismatic pair's
+  transform "a pure translation along the z axis"; AP242 (ISO 10303-105 ed. 2
+  as used by AP242) derives ``t_x = TRUE`` and every other flag FALSE, so it
+  slides along x. The layout is the ``layout`` parameter: ``"1996"`` (the
+  default for ``prismatic_pair``, which both layouts spell the same way) or
+  ``"ap242"`` (the default for ``prismatic_pair_with_range``, an AP242-only
+  name).
+* screw: Annex F: "translation along z (s) and a yaw rotation (theta) ...
+  in a screw pair one depends on the other (see 5.4.29)". The derived
+  ``actual_translation`` of ``screw_pair_value`` is ``pitch * angle / (2 PI)``
+  in AP242; the 1996 EXPRESS writes ``pitch * angle / 2 * PI`` which, by
+  EXPRESS operator precedence, would be ``pitch * angle * PI / 2`` -- a
+  transcription slip (it would not make ``pitch`` the advance per turn). We
+  follow AP242: ``pitch`` is the translation per full turn, positive pitch =
+  right-handed advance along +z for positive rotation.
+* cylindrical: Annex F as for the screw pair, with independent values; AP242
+  flags t_z and r_z. The two motions commute.
+* spherical: ``spherical_pair_value`` derives a ``ypr_rotation`` (5.4.35),
+  whose matrix is Annex E's ``Rx(roll) Ry(pitch) Rz(yaw)``
+  (:func:`p105cli.kinematics.placements.ypr_rotation`).
+* universal (5.4.37, 5.4.38): two rotations, "the first about the first axis,
+  the second about the second axis"; ``skew_angle`` (= ``NVL(input_skew_angle,
+  0)``) is "the offset of the angle between the two rotation axes from a right
+  angle", and WR1 requires ``cos(skew_angle) > 0``. AP242 flags r_x and r_z.
+  The body of 5.4.37 is not legible in the copy of the standard we have, so
+  the frame assignment is ours: the first axis is the first pair frame's z
+  axis; the second axis is fixed in the cross and in link 2 and is, at
+  ``q1 = 0``, ``a = (cos s, 0, sin s)`` in the first pair frame (the x axis
+  tilted by the skew towards +z, so the angle between the axes is
+  ``pi/2 - s``); ``M = Rz(q1) Rot(a, q2)`` with ``Rot(a, q2) = Ry(-s) Rx(q2)
+  Ry(s)``. With no skew, ``M = Rz(q1) Rx(q2)``; at ``q = 0`` the two pair
+  frames coincide.
+* homokinetic (a universal_pair subtype whose WR1 forbids a skew angle): the
+  constant-velocity joint. Ours: ``M = Rz(q1) Rx(q2) Rz(-q1)``, a pure swing of
+  the second frame's z axis by ``q2`` about the axis ``(cos q1, sin q1, 0)``
+  with no twist about z: the relative pose of a symmetric double Cardan joint
+  (two universal joints ``Rz(q1) Rx(q2/2)`` and its mirror image), which turns
+  the output shaft at the speed of the input shaft. ``q1`` is undefined at
+  ``q2 = 0`` (the Jacobian loses rank there).
+* planar: AP242 flags t_x, t_y, r_z; values in the order of
+  ``planar_pair_value`` (rotation, translation_x, translation_y). The
+  translation is the second frame's origin in the first frame.
+* unconstrained: the value is an ``axis2_placement_3d`` (the second pair frame
+  in the first); we parameterise it by its location and its ypr angles.
+* gear (spur): the corpus convention, each gear's rotation measured from the
+  line of centres (the first pair frame's x axis) as ``gear_pair_value``'s
+  derived ``actual_rotation_2 = -actual_rotation_1 * gear_ratio`` says:
+  ``M = Rz(-q1) Tx(r1 + r2) Rz(q2)``, ``q2 = -gear_ratio * q1``. The pair frames
+  sit on the gear axes; at ``q1 = 0`` they differ by the centre distance along
+  x. ``gear_ratio`` is the file's attribute (``r1 / r2`` for a spur mesh; it is
+  not checked against the radii). A non-zero ``bevel`` or ``helical_angle``
+  raises :class:`UnsupportedPairError`: the standard's text defining those
+  geometries is not available to us and the motion would be a guess.
+* rack and pinion (rack = first link): ``M = Tx(d) Ty(r) Rz(-d / r)`` -- the
+  pinion's centre rides at height ``r`` above the rack's pitch line (x axis)
+  and it turns by the 1996 ``rack_and_pinion_pair_value``'s derived
+  ``actual_rotation = -actual_displacement / pinion_radius``. (AP242's
+  ``rack_and_pinion_pair_value`` derives ``actual_rotation := 0.0``, which
+  cannot be a rolling motion; we follow the 1996 derivation.)
+
+Not implemented here: the higher pairs (point_on_surface, sliding_surface,
+rolling_surface, point_on_planar_curve, sliding_curve, rolling_curve), which
+need Part 42 curve/surface evaluation; AP242's generic
+``low_order_kinematic_pair`` (its six values have no defined composition
+order), ``spherical_pair_with_pin`` (its flags r_y, r_z contradict the yaw and
+roll limits of ``spherical_pair_with_pin_and_range``) and the flexible pairs.
+:func:`pair_type` raises :class:`UnsupportedPairError` for those names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .placements import compose, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, ypr_rotation
+
+__all__ = [
+    "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
+    "hat", "vee", "adjoint", "link_transform", "LAYOUTS",
+]
+
+#: Layouts of the pair frames: where a prismatic pair slides.
+LAYOUTS = ("1996", "ap242")
+
+_TWO_PI = 2.0 * np.pi
+
+
+class UnsupportedPairError(NotImplementedError):
+    """A pair type, or a parameter value, whose motion this module does not define."""
+
+
+# --------------------------------------------------------------------------- twist helpers
+
+def hat(twist) -> np.ndarray:
+    """(..., 4, 4) matrix ``[[w^, v], [0, 0]]`` of twists (..., 6) ordered (v, w)."""
+    t = np.asarray(twist, dtype=np.float64)
+    out = np.zeros(t.shape[:-1] + (4, 4))
+    vx, vy, vz, wx, wy, wz = np.moveaxis(t, -1, 0)
+    out[..., 0, 1], out[..., 0, 2] = -wz, wy
+    out[..., 1, 0], out[..., 1, 2] = wz, -wx
+    out[..., 2, 0], out[..., 2, 1] = -wy, wx
+    out[..., 0, 3], out[..., 1, 3], out[..., 2, 3] = vx, vy, vz
+    return out
+
+
+def vee(X) -> np.ndarray:
+    """Inverse of :func:`hat`: (..., 6) twist (v, w) of (..., 4, 4) se(3) matrices.
+
+    The angular part is read from the antisymmetric part, so a matrix that
+    is only approximately in se(3) (a finite difference) gives its nearest twist.
+    """
+    X = np.asarray(X, dtype=np.float64)
+    w = 0.5 * np.stack([X[..., 2, 1] - X[..., 1, 2], X[..., 0, 2] - X[..., 2, 0],
+                        X[..., 1, 0] - X[..., 0, 1]], axis=-1)
+    return np.concatenate([X[..., :3, 3], w], axis=-1)
+
+
+def adjoint(T) -> np.ndarray:
+    """(..., 6, 6) adjoint of rigid transforms for twists ordered (v, w).
+
+    ``hat(adjoint(T) @ xi) = T @ hat(xi) @ inverse(T)``: it maps a body
+    twist of ``T`` to the spatial one.
+    """
+    T = np.asarray(T, dtype=np.float64)
+    R, p = T[..., :3, :3], T[..., :3, 3]
+    P = hat(np.concatenate([np.zeros(p.shape), p], axis=-1))[..., :3, :3]
+    out = np.zeros(T.shape[:-2] + (6, 6))
+    out[..., :3, :3] = R
+    out[..., 3:, 3:] = R
+    out[..., :3, 3:] = P @ R
+    return out
+
+
+def link_transform(P1, M, P2) -> np.ndarray:
+    """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast)."""
+    from .placements import inverse
+    return compose(P1, M, inverse(P2))
+
+
+# --------------------------------------------------------------------------- small builders
+
+def _f(x) -> np.ndarray:
+    return np.asarray(x, dtype=np.float64)
+
+
+def _col(vectors, shape) -> np.ndarray:
+    """Stack a list of (..., 6) twists into a (..., 6, n) Jacobian of batch ``shape``."""
+    if not vectors:
+        return np.zeros(shape + (6, 0))
+    vs = [np.broadcast_to(v, shape + (6,)) for v in vectors]
+    return np.stack(vs, axis=-1)
+
+
+def _twist(v=None, w=None, shape=()) -> np.ndarray:
+    out = np.zeros(shape + (6,))
+    if v is not None:
+        out[..., :3] = v
+    if w is not None:
+        out[..., 3:] = w
+    return out
+
+
+_EX = np.array([1.0, 0.0, 0.0])
+_EY = np.array([0.0, 1.0, 0.0])
+_EZ = np.array([0.0, 0.0, 1.0])
+
+
+def _rt(R, v) -> np.ndarray:
+    """R^T v for (..., 3, 3) R and (..., 3) v."""
+    return np.einsum("...ji,...j->...i", R, v)
+
+
+def _hom(R, p=None) -> np.ndarray:
+    shape = R.shape[:-2] if p is None else np.broadcast_shapes(R.shape[:-2], p.shape[:-1])
+    T = np.zeros(shape + (4, 4))
+    T[..., :3, :3] = R
+    if p is not None:
+        T[..., :3, 3] = p
+    T[..., 3, 3] = 1.0
+    return T
+
+
+# --------------------------------------------------------------------------- the pairs
+# Each pair: motion(q_list, params) -> (..., 4, 4); body_jacobian(q_list, params, shape) -> (..., 6, n).
+# q_list is the list of (...) arrays q[..., i]; shape the broadcast batch shape.
+
+def _revolute_m(q, p):
+    return rot_z(q[0])
+
+
+def _revolute_j(q, p, shape):
+    return _col([_twist(w=_EZ, shape=shape)], shape)
+
+
+def _slide_axis(layout) -> int:
+    if layout == "1996":
+        return 2
+    if layout == "ap242":
+        return 0
+    raise ValueError(f"prismatic pair: layout must be one of {LAYOUTS} (1996: slide along z, "
+                     f"Annex F; ap242: slide along x, t_x = TRUE), got {layout!r}")
+
+
+def _prismatic_m(q, p):
+    return (trans_x, trans_y, trans_z)[_slide_axis(p["layout"])](q[0])
+
+
+def _prismatic_j(q, p, shape):
+    axis = np.eye(3)[_slide_axis(p["layout"])]
+    return _col([_twist(v=axis, shape=shape)], shape)
+
+
+def _lead(p):
+    return _f(p["pitch"]) / _TWO_PI
+
+
+def _screw_m(q, p):
+    return compose(rot_z(q[0]), trans_z(_lead(p) * q[0]))
+
+
+def _screw_j(q, p, shape):
+    h = _f(_lead(p))[..., None]
+    return _col([_twist(v=h * _EZ, w=_EZ, shape=shape)], shape)
+
+
+def _cylindrical_m(q, p):
+    return compose(trans_z(q[0]), rot_z(q[1]))
+
+
+def _cylindrical_j(q, p, shape):
+    return _col([_twist(v=_EZ, shape=shape), _twist(w=_EZ, shape=shape)], shape)
+
+
+def _ypr_body_axes(yaw, pitch):
+    """Body angular velocities of ``Rx(roll) Ry(pitch) Rz(yaw)`` per unit yaw, pitch, roll rate."""
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    zero, one = np.zeros_like(cy), np.ones_like(cy)
+    w_yaw = np.stack([zero, zero, one], axis=-1)
+    w_pitch = np.stack([sy, cy, zero], axis=-1)                 # Rz(-yaw) e_y
+    w_roll = np.stack([cy * cp, -sy * cp, sp], axis=-1)         # Rz(-yaw) Ry(-pitch) e_x
+    return w_yaw, w_pitch, w_roll
+
+
+def _spherical_m(q, p):
+    return _hom(ypr_rotation(q[0], q[1], q[2]))
+
+
+def _spherical_j(q, p, shape):
+    wy, wp, wr = _ypr_body_axes(*np.broadcast_arrays(q[0], q[1]))
+    return _col([_twist(w=wy, shape=shape), _twist(w=wp, shape=shape), _twist(w=wr, shape=shape)], shape)
+
+
+def _skew(p):
+    s = p.get("input_skew_angle")
+    s = _f(0.0 if s is None else s)
+    if np.any(~(np.cos(s) > 0.0)):
+        raise ValueError("universal pair: WR1 requires cos(skew_angle) > 0 (the axes' offset from a "
+                         "right angle must be acute)")
+    return s
+
+
+def _universal_m(q, p):
+    s = _skew(p)
+    return compose(rot_z(q[0]), rot_y(-s), rot_x(q[1]), rot_y(s))
+
+
+def _universal_j(q, p, shape):
+    s = _skew(p)
+    a = np.stack(np.broadcast_arrays(np.cos(s), np.zeros_like(s), np.sin(s)), axis=-1)
+    Ra = compose(rot_y(-s), rot_x(q[1]), rot_y(s))[..., :3, :3]
+    w1 = _rt(Ra, np.broadcast_to(_EZ, Ra.shape[:-1]))
+    return _col([_twist(w=w1, shape=shape), _twist(w=a, shape=shape)], shape)
+
+
+def _homokinetic_check(p):
+    s = p.get("input_skew_angle")
+    if s is not None:
+        raise ValueError("homokinetic pair: WR1 forbids input_skew_angle")
+
+
+def _homokinetic_m(q, p):
+    _homokinetic_check(p)
+    return compose(rot_z(q[0]), rot_x(q[1]), rot_z(-q[0]))
+
+
+def _homokinetic_j(q, p, shape):
+    _homokinetic_check(p)
+    R = _homokinetic_m(q, p)[..., :3, :3]
+    ez = np.broadcast_to(_EZ, R.shape[:-1])
+    w1 = _rt(R, ez) - ez                                         # M^T z - z
+    c, s = np.cos(q[0]), np.sin(q[0])
+    w2 = np.stack(np.broadcast_arrays(c, s, np.zeros_like(c)), axis=-1)   # Rz(q1) e_x
+    return _col([_twist(w=w1, shape=shape), _twist(w=w2, shape=shape)], shape)
+
+
+def _planar_m(q, p):
+    return compose(trans_x(q[1]), trans_y(q[2]), rot_z(q[0]))
+
+
+def _planar_j(q, p, shape):
+    R = rot_z(q[0])[..., :3, :3]
+    ex = np.broadcast_to(_EX, R.shape[:-1])
+    ey = np.broadcast_to(_EY, R.shape[:-1])
+    return _col([_twist(w=_EZ, shape=shape), _twist(v=_rt(R, ex), shape=shape),
+                 _twist(v=_rt(R, ey), shape=shape)], shape)
+
+
+def _unconstrained_m(q, p):
+    R = ypr_rotation(q[3], q[4], q[5])
+    t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
+    return _hom(R, t)
+
+
+def _unconstrained_j(q, p, shape):
+    R = ypr_rotation(q[3], q[4], q[5])
+    cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
+    wy, wp, wr = _ypr_body_axes(*np.broadcast_arrays(q[3], q[4]))
+    cols += [_twist(w=wy, shape=shape), _twist(w=wp, shape=shape), _twist(w=wr, shape=shape)]
+    return _col(cols, shape)
+
+
+def _fixed_m(q, p):
+    shape = p["_shape"]
+    return np.broadcast_to(np.eye(4), shape + (4, 4)).copy()
+
+
+def _fixed_j(q, p, shape):
+    return np.zeros(shape + (6, 0))
+
+
+def _gear_check(p):
+    for name in ("bevel", "helical_angle"):
+        v = _f(p.get(name, 0.0))
+        if np.any(v != 0.0):
+            raise UnsupportedPairError(
+                f"gear pair: {name} = {float(np.asarray(v).flat[np.flatnonzero(v)[0]]):g} is not "
+                "supported; only spur gears (bevel = 0, helical_angle = 0) have a defined motion here")
+
+
+def _gear_m(q, p):
+    _gear_check(p)
+    q1 = q[0]
+    q2 = -_f(p["gear_ratio"]) * q1
+    return compose(rot_z(-q1), trans_x(_f(p["radius_first_link"]) + _f(p["radius_second_link"])), rot_z(q2))
+
+
+def _gear_j(q, p, shape):
+    _gear_check(p)
+    k = _f(p["gear_ratio"])
+    c = _f(p["radius_first_link"]) + _f(p["radius_second_link"])
+    q1 = q[0]
+    R = rot_z(-q1 - k * q1)[..., :3, :3]
+    zxp = np.stack(np.broadcast_arrays(c * np.sin(q1), c * np.cos(q1), 0.0 * q1), axis=-1)  # z x p
+    v = -_rt(R, zxp)
+    w = -_f(1.0 + k)[..., None] * _EZ
+    return _col([_twist(v=v, w=w, shape=shape)], shape)
+
+
+def _rack_m(q, p):
+    d, r = q[0], _f(p["pinion_radius"])
+    return compose(trans_x(d), trans_y(r), rot_z(-d / r))
+
+
+def _rack_j(q, p, shape):
+    d, r = q[0], _f(p["pinion_radius"])
+    R = rot_z(-d / r)[..., :3, :3]
+    v = _rt(R, np.broadcast_to(_EX, R.shape[:-1]))
+    w = _f(-1.0 / r)[..., None] * _EZ
+    return _col([_twist(v=v, w=w, shape=shape)], shape)
+
+
+# --------------------------------------------------------------------------- the type
+
+@dataclass(frozen=True)
+class PairType:
+    """One pair type: its values, parameters and motion.
+
+    ``kind`` is the pair's short name (``"revolute"``, ...); ``value_names``
+    the attributes of its ``*_pair_value`` entity in order (the columns of
+    ``q``); ``param_names`` the pair attributes the motion needs;
+    ``defaults`` the defaults of optional parameters.
+    """
+
+    kind: str
+    value_names: tuple
+    param_names: tuple
+    _motion: Callable = field(repr=False)
+    _jacobian: Callable = field(repr=False)
+    defaults: dict = field(default_factory=dict)
+
+    @property
+    def value_count(self) -> int:
+        return len(self.value_names)
+
+    def with_defaults(self, **defaults) -> "PairType":
+        """The same pair type with other parameter defaults (e.g. ``layout="ap242"``)."""
+        return PairType(self.kind, self.value_names, self.param_names, self._motion, self._jacobian,
+                        {**self.defaults, **defaults})
+
+    # -- argument handling
+    def _args(self, q, params):
+        q = _f(q)
+        n = self.value_count
+        if q.ndim < 1 or q.shape[-1] != n:
+            raise ValueError(f"{self.kind} pair: q must have shape (..., {n}) "
+                             f"({', '.join(self.value_names) or 'no values'}), got {q.shape}")
+        unknown = set(params) - set(self.param_names) - set(self.defaults)
+        if unknown:
+            raise TypeError(f"{self.kind} pair: unknown parameter(s) {sorted(unknown)}; "
+                            f"expected {list(self.param_names)}")
+        p = {**self.defaults, **params}
+        missing = [k for k in self.param_names if k not in p]
+        if missing:
+            raise TypeError(f"{self.kind} pair: missing parameter(s) {missing}")
+        shape = q.shape[:-1]
+        for k, v in p.items():
+            if k == "layout" or v is None:
+                continue
+            shape = np.broadcast_shapes(shape, np.shape(v))
+        qs = [np.broadcast_to(q[..., i], shape) for i in range(n)]
+        p["_shape"] = shape
+        return qs, p, shape
+
+    # -- public API
+    def motion(self, q, **params) -> np.ndarray:
+        """``M(q)``: (..., 4, 4) placement of the second pair frame in the first."""
+        qs, p, shape = self._args(q, params)
+        M = self._motion(qs, p)
+        return np.broadcast_to(M, shape + (4, 4)).copy() if M.shape[:-2] != shape else M
+
+    def motion_jacobian(self, q, *, frame: str = "body", **params) -> np.ndarray:
+        """(..., 6, n) twist Jacobian; column i is ``vee(M^-1 dM/dq_i)`` (body, default) or
+        ``vee(dM/dq_i M^-1)`` (``frame="spatial"``). Twists ordered (v, w)."""
+        qs, p, shape = self._args(q, params)
+        J = self._jacobian(qs, p, shape)
+        if frame == "body":
+            return J
+        if frame == "spatial":
+            return adjoint(self.motion(q, **params)) @ J
+        raise ValueError(f"frame must be 'body' or 'spatial', got {frame!r}")
+
+    def motion_derivative(self, q, **params) -> np.ndarray:
+        """``dM/dq``: (..., n, 4, 4), ``dM/dq_i = M @ hat(J_body[..., :, i])``."""
+        M = self.motion(q, **params)
+        J = self.motion_jacobian(q, **params)
+        return M[..., None, :, :] @ hat(np.swapaxes(J, -1, -2))
+
+    def __call__(self, q, **params) -> np.ndarray:
+        return self.motion(q, **params)
+
+
+REVOLUTE = PairType("revolute", ("actual_rotation",), (), _revolute_m, _revolute_j)
+PRISMATIC = PairType("prismatic", ("actual_translation",), (), _prismatic_m, _prismatic_j,
+                     {"layout": "1996"})
+SCREW = PairType("screw", ("actual_rotation",), ("pitch",), _screw_m, _screw_j)
+CYLINDRICAL = PairType("cylindrical", ("actual_translation", "actual_rotation"), (),
+                       _cylindrical_m, _cylindrical_j)
+SPHERICAL = PairType("spherical", ("yaw", "pitch", "roll"), (), _spherical_m, _spherical_j)
+UNIVERSAL = PairType("universal", ("first_rotation_angle", "second_rotation_angle"), (),
+                     _universal_m, _universal_j, {"input_skew_angle": None})
+HOMOKINETIC = PairType("homokinetic", ("first_rotation_angle", "second_rotation_angle"), (),
+                       _homokinetic_m, _homokinetic_j, {"input_skew_angle": None})
+PLANAR = PairType("planar", ("actual_rotation", "actual_translation_x", "actual_translation_y"), (),
+                  _planar_m, _planar_j)
+UNCONSTRAINED = PairType("unconstrained", ("translation_x", "translation_y", "translation_z",
+                                           "yaw", "pitch", "roll"), (), _unconstrained_m, _unconstrained_j)
+FULLY_CONSTRAINED = PairType("fully_constrained", (), (), _fixed_m, _fixed_j)
+GEAR = PairType("gear", ("actual_rotation_1",), ("radius_first_link", "radius_second_link", "gear_ratio"),
+                _gear_m, _gear_j, {"bevel": 0.0, "helical_angle": 0.0})
+RACK_AND_PINION = PairType("rack_and_pinion", ("actual_displacement",), ("pinion_radius",),
+                           _rack_m, _rack_j)
+
+#: Pair types by short name.
+PAIR_KINDS = {t.kind: t for t in (REVOLUTE, PRISMATIC, SCREW, CYLINDRICAL, SPHERICAL, UNIVERSAL,
+                                  HOMOKINETIC, PLANAR, UNCONSTRAINED, FULLY_CONSTRAINED, GEAR,
+                                  RACK_AND_PINION)}
+
+#: Pair types by Part 105 entity name, for both layouts: the 1996 text / AP214 names
+#: (``*_pair``; its ranges are separate ``*_pair_range`` entities, not pairs) and
+#: AP242's ``*_pair_with_range`` subtypes. ``prismatic_pair`` defaults to the 1996
+#: layout (slide along z); ``prismatic_pair_with_range`` exists only in AP242 and
+#: defaults to the AP242 layout (slide along x). Pass ``layout=`` to override.
+PAIRS = {}
+for _t in PAIR_KINDS.values():
+    PAIRS[f"{_t.kind}_pair"] = _t
+    if _t.kind not in ("homokinetic", "unconstrained", "fully_constrained"):
+        PAIRS[f"{_t.kind}_pair_with_range"] = _t
+PAIRS["prismatic_pair_with_range"] = PRISMATIC.with_defaults(layout="ap242")
+del _t
+
+#: Entity names of pairs whose motion is not defined here (see the module docstring).
+NOT_IMPLEMENTED = (
+    "point_on_surface_pair", "point_on_surface_pair_with_range", "sliding_surface_pair",
+    "rolling_surface_pair", "point_on_planar_curve_pair", "point_on_planar_curve_pair_with_range",
+    "sliding_curve_pair", "rolling_curve_pair", "low_order_kinematic_pair",
+    "low_order_kinematic_pair_with_range", "spherical_pair_with_pin", "spherical_pair_with_pin_and_range",
+    "linear_flexible_and_pinion_pair", "linear_flexible_and_planar_curve_pair",
+)
+
+
+def pair_type(entity_name: str) -> PairType:
+    """The :class:`PairType` of a Part 105 pair entity name (case-insensitive).
+
+    Raises :class:`UnsupportedPairError` for a known pair whose motion is not
+    implemented, ``KeyError`` for a name that is not a pair.
+    """
+    name = entity_name.lower()
+    if name in PAIRS:
+        return PAIRS[name]
+    if name in NOT_IMPLEMENTED:
+        raise UnsupportedPairError(f"{name}: the motion of this pair type is not implemented "
+                                   "(higher pairs need Part 42 curve/surface evaluation)")
+    raise KeyError(f"{entity_name!r} is not a Part 105 pair entity name known to p105cli")
