@@ -6,8 +6,7 @@ import sys
 
 import click
 
-from .contract import (EXIT_STATUS_TEXT, ExitCode, InputError, copy_to_stdout, diag, open_output,
-                       read_input_bytes)
+from .contract import EXIT_STATUS_TEXT, ExitCode, copy_to_stdout, diag, open_output, read_input_bytes
 
 FORMAT_NAMES = ["auto", "text", "json", "jsonl", "sarif", "junit", "github", "gitlab"]
 
@@ -113,5 +112,3 @@ def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pa
     if code:
         raise click.exceptions.Exit(code)
 
-
-__all__ = ["validate", "InputError"]

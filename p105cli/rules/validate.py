@@ -50,7 +50,7 @@ def kinematic_entity_names() -> frozenset:
 
 
 def kinematic_closure(pop) -> list[int]:
-    """Ids of the kinematic instances and everything they reference, in file order."""
+    """Ids of the kinematic instances and everything they reference, in id order."""
     schema = pop.schema
     seeds: set[int] = set()
     for name in kinematic_entity_names():
@@ -63,7 +63,7 @@ def kinematic_closure(pop) -> list[int]:
             if r not in seen and pop.types_of(r) is not None:
                 seen.add(r)
                 todo.append(r)
-    return sorted(seen, key=pop.slot_of) if hasattr(pop, "slot_of") else sorted(seen)
+    return sorted(seen)
 
 
 def rule_source(path: str | Path, line: int) -> str:
