@@ -704,6 +704,37 @@ class Schema(Node):
                 return r
         return None
 
+    def redeclarations(self, entities) -> tuple[dict, dict, dict]:
+        """Redeclarations (``SELF\\super.attr``) made by ``entities``, most specific first.
+
+        Keys are ``(declaring entity, attribute name)`` of the original
+        attribute; the first entity to redeclare it wins. Returns
+        ``(retyped: key -> ExplicitAttribute, derived_in: key -> entity name,
+        renamed: key -> new name)``.
+        """
+        retyped: dict = {}
+        derived_in: dict = {}
+        renamed: dict = {}
+        for en in entities:
+            e = self.entities[en]
+            for a in e.attributes:
+                if a.supertype is not None:
+                    r = self.resolve_attribute(a.supertype, a.name)
+                    if r is not None:
+                        k = (r[0], r[1].name)
+                        retyped.setdefault(k, a)
+                        if a.renamed:
+                            renamed.setdefault(k, a.renamed)
+            for a in e.derived:
+                if a.supertype is not None:
+                    r = self.resolve_attribute(a.supertype, a.name)
+                    if r is not None:
+                        k = (r[0], r[1].name)
+                        derived_in.setdefault(k, en)
+                        if a.renamed:
+                            renamed.setdefault(k, a.renamed)
+        return retyped, derived_in, renamed
+
     def p21_attributes(self, name: str) -> list:
         """The ordered slots of a Part 21 simple instance of entity ``name``.
 
@@ -740,27 +771,7 @@ class Schema(Node):
         # redeclarations visible from `name`: the most specific one wins
         # (chain lists the entity first, then supertypes depth-first, so an
         # entity is always met before its own supertypes)
-        retyped: dict = {}
-        derived_in: dict = {}
-        renamed: dict = {}
-        for en in chain:
-            e = self.entities[en]
-            for a in e.attributes:
-                if a.supertype is not None:
-                    r = self.resolve_attribute(a.supertype, a.name)
-                    if r is not None:
-                        k = (r[0], r[1].name)
-                        retyped.setdefault(k, a)
-                        if a.renamed:
-                            renamed.setdefault(k, a.renamed)
-            for a in e.derived:
-                if a.supertype is not None:
-                    r = self.resolve_attribute(a.supertype, a.name)
-                    if r is not None:
-                        k = (r[0], r[1].name)
-                        derived_in.setdefault(k, en)
-                        if a.renamed:
-                            renamed.setdefault(k, a.renamed)
+        retyped, derived_in, renamed = self.redeclarations(chain)
         out = []
         for owner, a in order:
             k = (owner, a.name)

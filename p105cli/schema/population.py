@@ -425,27 +425,7 @@ class Population:
         known = [t for t in types if t in s.entities]
         # the most specific redeclaration wins: a subtype has more supertypes
         known.sort(key=lambda t: (-len(s.all_supertypes(t)), t))
-        retyped: dict = {}
-        derived_in: dict = {}
-        renamed: dict = {}
-        for t in known:
-            e = s.entities[t]
-            for a in e.attributes:
-                if a.supertype is not None:
-                    r = s.resolve_attribute(a.supertype, a.name)
-                    if r is not None:
-                        k = (r[0], r[1].name)
-                        retyped.setdefault(k, a)
-                        if a.renamed:
-                            renamed.setdefault(k, a.renamed)
-            for d in e.derived:
-                if d.supertype is not None:
-                    r = s.resolve_attribute(d.supertype, d.name)
-                    if r is not None:
-                        k = (r[0], r[1].name)
-                        derived_in.setdefault(k, t)
-                        if d.renamed:
-                            renamed.setdefault(k, d.renamed)
+        retyped, derived_in, renamed = s.redeclarations(known)
         slots = []
         offsets = []
         for part, pname in enumerate(shape):
