@@ -57,6 +57,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+from p105cli.fileio import write_text_atomically  # noqa: E402  (the repo checkout, not an install)
 RESULT_MARKER = "@@BENCH-RESULT@@ "
 NAMES_FILE = "kinematics_entity_names_union.txt"
 SMALL_EXAMPLE = REPO / "examples" / "four_bar_ap242.stp"
@@ -867,20 +869,7 @@ def _default_names(corpus: Path) -> Path:
 
 def write_atomic(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_text_atomically(path, text)
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:

@@ -20,9 +20,11 @@ import os
 import platform
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from p105cli.fileio import write_text_atomically  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 KINEMATIC_FILES = [REPO / "examples" / "four_bar_ap242.stp",
@@ -77,10 +79,7 @@ def main() -> int:
                 "Conformance (SCH-*) is checked on every instance; WHERE, UNIQUE and global rules on the "
                 "kinematic closure (docs/validate.md), so the real CAD files, which hold no kinematics, "
                 "have no rules applicable.\n")
-        fd, tmp = tempfile.mkstemp(dir=opts.markdown.parent, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(page)
-        os.replace(tmp, opts.markdown)
+        write_text_atomically(opts.markdown, page)
         print(f"wrote {opts.markdown}")
     return 0
 

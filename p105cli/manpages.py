@@ -19,11 +19,11 @@ import inspect
 import os
 import re
 import sys
-import tempfile
 
 import click
 
 from p105cli import __version__
+from p105cli.fileio import atomic_file
 
 PROG = "p105"
 SECTION = "1"
@@ -531,23 +531,8 @@ def _write_atomically(path: str, text: str) -> bool:
                 return False
     except OSError:
         pass
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".manpage-", suffix=".tmp", dir=directory)
-    try:
-        with open(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    with atomic_file(path, binary=True) as fh:
+        fh.write(data)
     return True
 
 

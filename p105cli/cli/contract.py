@@ -16,10 +16,11 @@ import contextlib
 import io
 import os
 import sys
-import tempfile
 from enum import IntEnum
 
 import click
+
+from p105cli.fileio import AtomicWriteError, atomic_file
 
 
 class ExitCode(IntEnum):
@@ -152,30 +153,11 @@ def open_output(path: str | None, inputs: tuple = ()):
         if src not in (None, "-") and os.path.exists(path) and os.path.exists(src) \
                 and os.path.samefile(src, path):
             raise click.UsageError(f"output {path} is the input {src}: p105 never overwrites its input")
-    directory = os.path.dirname(os.path.abspath(path))
     try:
-        fd, tmp = tempfile.mkstemp(prefix=".p105-", suffix=".tmp", dir=directory)
-    except OSError as err:
-        raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
-    try:
-        with open(fd, "w", encoding="utf-8", newline="\n") as out:
+        with atomic_file(path) as out:
             yield out
-            out.flush()
-            os.fsync(out.fileno())
-        if os.path.exists(path):
-            os.chmod(tmp, os.stat(path).st_mode & 0o7777)
-        else:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-        try:
-            os.replace(tmp, path)
-        except OSError as err:
-            raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    except AtomicWriteError as err:
+        raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
 
 
 def copy_to_stdout(data: bytes) -> None:

@@ -35,8 +35,9 @@ import os
 import pickle
 import re
 import sys
-import tempfile
 from pathlib import Path
+
+from p105cli.fileio import atomic_file
 
 from .model import (
     AggregateElement, AggregateInit, AggregateType, AliasStmt, Assignment, AttributeRef,
@@ -1235,24 +1236,13 @@ def load_schema(path, name: str | None = None, cache: bool = True) -> Schema:
 
 
 def _write_cache(cp: Path, obj) -> None:
-    tmp = None
+    # An unwritable cache only costs speed: failures are swallowed.
     try:
         cp.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=cp.name + ".", suffix=".tmp", dir=cp.parent)
-        with os.fdopen(fd, "wb") as f:
+        with atomic_file(cp, binary=True) as f:
             pickle.dump(obj, f, protocol=pickle.HIGHEST_PROTOCOL)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, cp)
-        tmp = None
     except (OSError, pickle.PicklingError, RecursionError):
         pass
-    finally:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
 
 
 def compile_package_schemas() -> list[Path]:
