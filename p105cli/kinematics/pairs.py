@@ -147,7 +147,8 @@ from typing import Callable
 
 import numpy as np
 
-from .placements import compose, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, ypr_rotation
+from .placements import (compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform,
+                         ypr_rotation)
 
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
@@ -208,7 +209,6 @@ def adjoint(T) -> np.ndarray:
 
 def link_transform(P1, M, P2) -> np.ndarray:
     """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast)."""
-    from .placements import inverse
     return compose(P1, M, inverse(P2))
 
 
@@ -243,16 +243,6 @@ _EZ = np.array([0.0, 0.0, 1.0])
 def _rt(R, v) -> np.ndarray:
     """R^T v for (..., 3, 3) R and (..., 3) v."""
     return np.einsum("...ji,...j->...i", R, v)
-
-
-def _hom(R, p=None) -> np.ndarray:
-    shape = R.shape[:-2] if p is None else np.broadcast_shapes(R.shape[:-2], p.shape[:-1])
-    T = np.zeros(shape + (4, 4))
-    T[..., :3, :3] = R
-    if p is not None:
-        T[..., :3, 3] = p
-    T[..., 3, 3] = 1.0
-    return T
 
 
 # --------------------------------------------------------------------------- the pairs
@@ -318,7 +308,7 @@ def _ypr_body_axes(yaw, pitch):
 
 
 def _spherical_m(q, p):
-    return _hom(ypr_rotation(q[0], q[1], q[2]))
+    return transform(ypr_rotation(q[0], q[1], q[2]))
 
 
 def _spherical_j(q, p, shape):
@@ -384,7 +374,7 @@ def _planar_j(q, p, shape):
 def _unconstrained_m(q, p):
     R = ypr_rotation(q[3], q[4], q[5])
     t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
-    return _hom(R, t)
+    return transform(R, t)
 
 
 def _unconstrained_j(q, p, shape):
