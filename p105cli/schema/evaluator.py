@@ -739,8 +739,7 @@ class Evaluator:
 
     def _make_info(self, types) -> _AttrInfo:
         s = self.schema
-        known = [t for t in types if t in s.entities]
-        known.sort(key=lambda t: (-len(s.all_supertypes(t)), t))
+        known = s.most_specific_first(types)
         access: dict = {}
         override: dict = {}
         names: dict = {}

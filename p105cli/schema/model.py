@@ -704,6 +704,13 @@ class Schema(Node):
                 return r
         return None
 
+    def most_specific_first(self, types) -> list:
+        """The entity names among ``types`` known to this schema, subtypes before their
+        supertypes (more supertypes first; ties by name), the order in which the
+        first redeclaration met is the one that applies."""
+        return sorted((t for t in types if t in self.entities),
+                      key=lambda t: (-len(self.all_supertypes(t)), t))
+
     def redeclarations(self, entities) -> tuple[dict, dict, dict]:
         """Redeclarations (``SELF\\super.attr``) made by ``entities``, most specific first.
 

@@ -422,9 +422,7 @@ class Population:
                                       a.renamed, 0, pos))
             return Layout(shape, types, leaf, slots, [0])
         types, leaf = self.resolve_types(shape)
-        known = [t for t in types if t in s.entities]
-        # the most specific redeclaration wins: a subtype has more supertypes
-        known.sort(key=lambda t: (-len(s.all_supertypes(t)), t))
+        known = s.most_specific_first(types)
         retyped, derived_in, renamed = s.redeclarations(known)
         slots = []
         offsets = []
