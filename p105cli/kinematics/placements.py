@@ -60,7 +60,7 @@ __all__ = [
     "ypr_rotation", "ypr_from_matrix", "rotation_about_direction",
     "convert_spatial_to_ypr_rotation",
     "plane_angle_to_radian", "radian_to_plane_angle",
-    "matrix_to_quaternion", "quaternion_to_matrix",
+    "matrix_to_quaternion", "quaternion_to_matrix", "slerp",
     "EULER_SEQUENCES", "matrix_to_euler", "euler_to_matrix",
 ]
 
@@ -705,6 +705,35 @@ def quaternion_to_matrix(q, order: str = "wxyz") -> np.ndarray:
     R[..., 2, 1] = 2.0 * (y * z + x * w)
     R[..., 2, 2] = 1.0 - 2.0 * (x * x + y * y)
     return R
+
+
+def slerp(R0, R1, s) -> np.ndarray:
+    """Spherical linear interpolation between rotations: (..., 3, 3), exact at s = 0 and 1.
+
+    ``R0``, ``R1``: (..., 3, 3) or (..., 4, 4) (rotation part used); ``s``:
+    fractions in [0, 1] broadcasting with their leading axes. Interpolates
+    the unit quaternions along the shorter great arc (constant angular
+    velocity about a fixed axis), so ``slerp(R0, R1, 0) = R0`` and
+    ``slerp(R0, R1, 1) = R1``; never interpolates angles. For nearly equal
+    rotations (angle below 1e-8 rad) the normalised linear blend of the
+    quaternions is used, which agrees with slerp to rounding there.
+    """
+    q0 = matrix_to_quaternion(R0)
+    q1 = matrix_to_quaternion(R1)
+    s = _f(s)
+    dot = np.sum(q0 * q1, axis=-1)
+    q1 = np.where((dot < 0.0)[..., None], -q1, q1)  # the shorter arc
+    dot = np.abs(dot)
+    omega = np.arccos(np.clip(dot, -1.0, 1.0))
+    small = omega < 1e-8
+    sin_omega = np.where(small, 1.0, np.sin(omega))
+    w0 = np.where(small, 1.0 - s, np.sin((1.0 - s) * omega) / sin_omega)
+    w1 = np.where(small, s, np.sin(s * omega) / sin_omega)
+    q = w0[..., None] * q0 + w1[..., None] * q1
+    R = quaternion_to_matrix(q)
+    # the end rotations exactly, not through a quaternion round trip
+    R = np.where((s == 0.0)[..., None, None], _rot_part(R0, "R0"), R)
+    return np.where((s == 1.0)[..., None, None], _rot_part(R1, "R1"), R)
 
 
 # --------------------------------------------------------------------------- Euler / Cardan angles
