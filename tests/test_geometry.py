@@ -333,3 +333,149 @@ def test_invalid_inputs_raise():
         G.ConicalSurface(T0, 1.0, PI / 2)
     with pytest.raises(ValueError):
         G.Polyline([[0, 0, 0]])
+
+
+# ---------------------------------------------------------------- second derivatives of surfaces
+@pytest.mark.parametrize("name", sorted(SURFACES))
+def test_surface_second_derivatives_vs_finite_differences(name):
+    srf, (u0, u1), (v0, v1) = SURFACES[name]
+    u, v = np.meshgrid(np.linspace(u0 + 0.05, u1 - 0.05, 7), np.linspace(v0 + 0.05, v1 - 0.05, 5))
+    if "bspline" in name:
+        u, v = _avoid_knots(u, srf.U, 1e-2), _avoid_knots(v, srf.V, 1e-2)
+    h = 1e-5
+    s, su, sv, suu, suv, svv = srf.evaluate2(u, v)
+    s1, su1, sv1 = srf.evaluate(u, v)
+    np.testing.assert_allclose(s, s1, atol=1e-13)
+    np.testing.assert_allclose(su, su1, atol=1e-12)
+    np.testing.assert_allclose(sv, sv1, atol=1e-12)
+    _, su_p, sv_p = srf.evaluate(u + h, v)
+    _, su_m, sv_m = srf.evaluate(u - h, v)
+    _, su_q, sv_q = srf.evaluate(u, v + h)
+    _, su_n, sv_n = srf.evaluate(u, v - h)
+    tol = 1e-6 * (1 + np.abs(s).max()) * 10
+    np.testing.assert_allclose(suu, (su_p - su_m) / (2 * h), atol=tol)
+    np.testing.assert_allclose(suv, (sv_p - sv_m) / (2 * h), atol=tol)
+    np.testing.assert_allclose(suv, (su_q - su_n) / (2 * h), atol=tol)
+    np.testing.assert_allclose(svv, (sv_q - sv_n) / (2 * h), atol=tol)
+
+
+# ---------------------------------------------------------------- transformed
+T1 = np.eye(4)
+T1[:3, :3] = Rotation.from_rotvec([0.4, -1.2, 0.7]).as_matrix()
+T1[:3, 3] = [3.0, -1.0, 2.5]
+
+
+def _moved(T, p):
+    return p @ T[:3, :3].T + T[:3, 3]
+
+
+ALL_CURVES = dict(CURVES, polyline=(G.Polyline(RNG.normal(size=(4, 3))), (0.0, 3.0)),
+                  trimmed=(G.TrimmedCurve(G.Circle(T0, 1.1), 0.5, 2.0, True), (0.0, 1.5)))
+
+
+@pytest.mark.parametrize("name", sorted(ALL_CURVES))
+def test_curve_transformed(name):
+    crv, (a, b) = ALL_CURVES[name]
+    moved = crv.transformed(T1)
+    assert type(moved) is type(crv)
+    t = np.linspace(a, b, 23)
+    p, d, dd = crv.evaluate(t)
+    q, e, ee = moved.evaluate(t)
+    np.testing.assert_allclose(q, _moved(T1, p), atol=1e-12)
+    np.testing.assert_allclose(e, d @ T1[:3, :3].T, atol=1e-12)
+    np.testing.assert_allclose(ee, dd @ T1[:3, :3].T, atol=1e-11)
+    # the original is unchanged
+    np.testing.assert_array_equal(crv.evaluate(t)[0], p)
+
+
+@pytest.mark.parametrize("name", sorted(SURFACES))
+def test_surface_transformed(name):
+    srf, (u0, u1), (v0, v1) = SURFACES[name]
+    moved = srf.transformed(T1)
+    assert type(moved) is type(srf)
+    u, v = np.meshgrid(np.linspace(u0, u1, 5), np.linspace(v0, v1, 4))
+    a = srf.evaluate2(u, v)
+    b = moved.evaluate2(u, v)
+    np.testing.assert_allclose(b[0], _moved(T1, a[0]), atol=1e-12)
+    for x, y in zip(a[1:], b[1:]):
+        np.testing.assert_allclose(y, x @ T1[:3, :3].T, atol=1e-11)
+    np.testing.assert_allclose(moved.normal(u, v), srf.normal(u, v) @ T1[:3, :3].T, atol=1e-12)
+
+
+def test_transformed_rejects_non_rigid():
+    with pytest.raises(ValueError, match="rigid"):
+        G.Circle(T0, 1.0).transformed(np.diag([2.0, 1.0, 1.0, 1.0]))
+
+
+# ---------------------------------------------------------------- trimmed curves
+def test_trimmed_curve_parameterisation():
+    circle = G.Circle(T0, 2.0)
+    # sense TRUE: c(s) = B(t1 + s), s in [0, t2 - t1]
+    tc = G.TrimmedCurve(circle, 0.5, 2.0, True)
+    assert tc.bounds == (0.0, 1.5)
+    np.testing.assert_allclose(tc.evaluate(0.3)[0], C + 2.0 * (math.cos(0.8) * X + math.sin(0.8) * Y), atol=1e-14)
+    # sense FALSE: c(s) = B(t1 - s); the tangent is reversed
+    tf = G.TrimmedCurve(circle, 2.0, 0.5, False)
+    np.testing.assert_allclose(tf.evaluate(0.0)[0], circle.evaluate(2.0)[0], atol=1e-14)
+    np.testing.assert_allclose(tf.evaluate(1.5)[0], circle.evaluate(0.5)[0], atol=1e-14)
+    np.testing.assert_allclose(tf.evaluate(0.4)[1], -circle.evaluate(1.6)[1], atol=1e-14)
+    # periodic basis: 350 deg -> 10 deg with sense TRUE is the short arc through 0
+    tp = G.TrimmedCurve(circle, math.radians(350), math.radians(10), True)
+    np.testing.assert_allclose(tp.bounds[1], math.radians(20), atol=1e-14)
+    np.testing.assert_allclose(tp.evaluate(math.radians(10))[0], circle.evaluate(0.0)[0], atol=1e-14)
+    # ... and with sense FALSE the long way round
+    tq = G.TrimmedCurve(circle, math.radians(350), math.radians(10), False)
+    np.testing.assert_allclose(tq.bounds[1], math.radians(340), atol=1e-13)
+    # a line trimmed against its sense is an error (not periodic)
+    with pytest.raises(ValueError, match="sense_agreement"):
+        G.TrimmedCurve(G.Line([0, 0, 0], [1.0, 0, 0]), 0.0, 2.0, False)
+
+
+# ---------------------------------------------------------------- arc length
+def test_arc_length_closed_forms():
+    circle = G.Circle(T0, 1.7)
+    t0, t1 = np.array([0.0, -1.0, 2.0]), np.array([1.0, 3.0, -2.0])
+    np.testing.assert_allclose(G.arc_length(circle, t0, t1), 1.7 * (t1 - t0), atol=1e-13)
+    line = G.Line([1.0, 2.0, 3.0], [0.5, -1.0, 2.0])
+    np.testing.assert_allclose(G.arc_length(line, 0.0, 2.0), 2.0 * math.sqrt(5.25), atol=1e-13)
+    poly = G.Polyline([[0, 0, 0], [3, 4, 0], [3, 4, 2.0]])
+    np.testing.assert_allclose(G.arc_length(poly, [0.0, 0.5, 0.0], [2.0, 1.5, 1.25]), [7.0, 2.5 + 1.0, 5.5],
+                               atol=1e-13)
+
+
+def test_arc_length_ellipse_and_bspline_vs_quad():
+    from scipy.integrate import quad
+    ell = G.Ellipse(T0, 2.5, 0.8)
+    ref = quad(lambda t: math.hypot(2.5 * math.sin(t), 0.8 * math.cos(t)), 0.2, 2.9, epsabs=1e-13)[0]
+    np.testing.assert_allclose(G.arc_length(ell, 0.2, 2.9), ref, rtol=1e-12)
+    crv = CURVES["bspline"][0]
+    pts = [0.0, 0.7, 1.5, 2.2]
+    ref = quad(lambda t: np.linalg.norm(crv.evaluate(t)[1]), 0.1, 2.2, points=pts, epsabs=1e-12, limit=200)[0]
+    np.testing.assert_allclose(G.arc_length(crv, 0.1, 2.2), ref, rtol=1e-11)
+    np.testing.assert_allclose(G.arc_length(crv, 2.2, 0.1), -ref, rtol=1e-11)
+    # a trimmed curve against its sense has the basis' length between the trims
+    tc = G.TrimmedCurve(ell, 2.9, 0.2, False)
+    np.testing.assert_allclose(G.arc_length(tc, 0.0, 2.7), G.arc_length(ell, 0.2, 2.9), rtol=1e-13)
+
+
+def test_parameter_at_arc_length_inverts():
+    for crv, t0, ts in ((G.Ellipse(T0, 2.5, 0.8), 0.3, np.array([-2.0, 0.1, 1.0, 4.0])),
+                        (G.Circle(T0, 1.7), 0.0, np.array([-1.0, 2.0])),
+                        (G.Polyline([[0, 0, 0], [3, 4, 0], [3, 4, 2.0]]), 0.2, np.array([0.5, 1.7])),
+                        (CURVES["bspline"][0], 0.3, np.array([0.1, 1.4, 1.6, 2.45])),
+                        (G.TrimmedCurve(G.Ellipse(T0, 2.5, 0.8), 2.0, 0.5, False), 0.1, np.array([0.0, 1.3]))):
+        s = G.arc_length(crv, t0, ts)
+        np.testing.assert_allclose(G.parameter_at_arc_length(crv, t0, s), ts, atol=1e-10)
+
+
+def test_bspline_many_spans_vs_scipy():
+    """The span-local recursion scattered into the dense basis: 30 spans, uneven knots, 2 derivatives."""
+    knots = np.concatenate([[0.0], np.sort(RNG.uniform(0.0, 1.0, 29)), [1.0]])
+    P = RNG.normal(size=(33, 3))
+    crv = G.BSplineCurve(3, P, [4] + [1] * 29 + [4], knots)
+    ref = BSpline(crv.U, P, 3)
+    t = _avoid_knots(np.linspace(0.0, 1.0, 997), knots, 1e-7)
+    p, d, dd = crv.evaluate(t)
+    np.testing.assert_allclose(p, ref(t), atol=1e-12)
+    np.testing.assert_allclose(d, ref.derivative(1)(t), atol=1e-8 * np.abs(ref.derivative(1)(t)).max())
+    np.testing.assert_allclose(dd, ref.derivative(2)(t), atol=1e-8 * np.abs(ref.derivative(2)(t)).max())

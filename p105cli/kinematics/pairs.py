@@ -64,7 +64,21 @@ gear                   (rotation_1,); params radius_first_link,   ``Rz(-q1) Tx(r
                        radius_second_link, gear_ratio, bevel=0,   Rz(-gear_ratio q1)``
                        helical_angle=0
 rack_and_pinion        (displacement,); param pinion_radius       ``Tx(d) Ty(r) Rz(-d / r)``
+point_on_surface       (u, v, yaw, pitch, roll); param surface    ``Trans(S(u,v)) ypr``
+point_on_planar_curve  (u, yaw, pitch, roll); param curve         ``Trans(C(u)) ypr``
+sliding_surface        (u1, v1, u2, v2, rotation); params         ``F1(u1,v1) Rz(rot) Rx(pi)^[not
+                       surface_1, surface_2, orientation          o] F2(u2,v2)^-1``
+rolling_surface        (u1, v1, rotation); + state (u2, v2)       as sliding_surface, no slip
+sliding_curve          (u1, u2); curve_1, curve_2, orientation    ``G1(u1) Rz(pi)^[not o] G2(u2)^-1``
+rolling_curve          (u1,); u2 from equal arc lengths           as sliding_curve
+low_order (AP242)      (tx, ty, tz, rx, ry, rz); flags t_x..r_z   ``T(t) Rx(rx) Ry(ry) Rz(rz)``
+spherical_with_pin     (yaw, pitch, roll = 0)                     ``Ry(pitch) Rz(yaw)``
 =====================  =========================================  ==============================
+
+``F(u, v)`` is a surface's contact frame (origin ``S``, x along ``Su``, z along
+``Su x Sv``), ``G(u)`` a planar curve's (origin ``C``, x along the tangent's xy
+part, z = +z); ``o`` the pair's ``orientation``. The full definitions, the
+choices made and their reasons are in docs/pairs.md.
 
 Where these come from, and what had to be chosen:
 
@@ -122,8 +136,10 @@ Where these come from, and what had to be chosen:
   sit on the gear axes; at ``q1 = 0`` they differ by the centre distance along
   x. ``gear_ratio`` is the file's attribute (``r1 / r2`` for a spur mesh; it is
   not checked against the radii). A non-zero ``bevel`` or ``helical_angle``
-  raises :class:`UnsupportedPairError`: the standard's text defining those
-  geometries is not available to us and the motion would be a guess.
+  raises :class:`UnsupportedPairError`: neither EXPRESS (both layouts
+  declare the two angles with no rule or derived attribute using them) nor
+  the available text (5.4.64-5.4.66 are missing from the capture) defines
+  where a bevel's or helical gear's axes lie, so the motion would be a guess.
 * rack and pinion (rack = first link): ``M = Tx(d) Ty(r) Rz(-d / r)`` -- the
   pinion's centre rides at height ``r`` above the rack's pitch line (x axis)
   and it turns by the 1996 ``rack_and_pinion_pair_value``'s derived
@@ -131,13 +147,29 @@ Where these come from, and what had to be chosen:
   ``rack_and_pinion_pair_value`` derives ``actual_rotation := 0.0``, which
   cannot be a rolling motion; we follow the 1996 derivation.)
 
-Not implemented here: the higher pairs (point_on_surface, sliding_surface,
-rolling_surface, point_on_planar_curve, sliding_curve, rolling_curve), which
-need Part 42 curve/surface evaluation; AP242's generic
-``low_order_kinematic_pair`` (its six values have no defined composition
-order), ``spherical_pair_with_pin`` (its flags r_y, r_z contradict the yaw and
-roll limits of ``spherical_pair_with_pin_and_range``) and the flexible pairs.
-:func:`pair_type` raises :class:`UnsupportedPairError` for those names.
+* higher pairs (5.1: pairs 12-17) take their curves and surfaces as
+  :mod:`p105cli.kinematics.geometry` objects in the coordinates of their pair
+  frame (``surface``, ``curve``, ``surface_1``/``surface_2`` in the first/second
+  pair frame, ``curve_1``/``curve_2``). The point pairs' orientation is
+  relative to the first pair frame's axes (the corpus convention); sliding
+  pairs make the two contact frames coincide (normals and tangents as the
+  ``orientation`` flag says); rolling curves add equal arc lengths from the
+  ``reference_parameter_1``/``_2`` points (holonomic); rolling surfaces are
+  non-holonomic: ``point_on_surface_2`` is state and their Jacobian is the
+  no-slip velocity map (:func:`rolling_surface_rates`). Degenerate contact
+  frames raise ValueError (never NaN).
+* low_order (AP242 ``low_order_kinematic_pair``): translation first, then
+  ``Rx(rx) Ry(ry) Rz(rz)`` (= the ypr matrix with roll, pitch, yaw = rx, ry,
+  rz, so a spherical pair is the low order pair with the three r flags); a
+  value whose flag is FALSE must be 0 and has a zero Jacobian column.
+* spherical_pair_with_pin: its ``spherical_pair_value`` ypr with the roll
+  (about x) locked, as AP242's DERIVE (r_x FALSE, r_y and r_z TRUE) says.
+  (``spherical_pair_with_pin_and_range`` bounds yaw and roll, not pitch; we
+  follow the DERIVE, which is normative, and document the clash.)
+
+Not implemented: the flexible pairs (``linear_flexible_and_pinion_pair``,
+``linear_flexible_and_planar_curve_pair``); :func:`pair_type` raises
+:class:`UnsupportedPairError` for those names.
 """
 
 from __future__ import annotations
@@ -152,7 +184,7 @@ from .placements import (compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y
 
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
-    "hat", "vee", "adjoint", "link_transform", "LAYOUTS",
+    "hat", "vee", "adjoint", "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -400,7 +432,8 @@ def _gear_check(p):
         if np.any(v != 0.0):
             raise UnsupportedPairError(
                 f"gear pair: {name} = {float(np.asarray(v).flat[np.flatnonzero(v)[0]]):g} is not "
-                "supported; only spur gears (bevel = 0, helical_angle = 0) have a defined motion here")
+                "supported; only spur gears (bevel = 0, helical_angle = 0) have a defined motion here: "
+                "neither layout's EXPRESS places a bevel or helical gear's axes (docs/pairs.md)")
 
 
 def _gear_m(q, p):
@@ -433,6 +466,313 @@ def _rack_j(q, p, shape):
     v = _rt(R, np.broadcast_to(_EX, R.shape[:-1]))
     w = _f(-1.0 / r)[..., None] * _EZ
     return _col([_twist(v=v, w=w, shape=shape)], shape)
+
+
+# --------------------------------------------------------------------------- higher pairs
+# Contact frames on the pair geometry (see docs/pairs.md). Each helper returns the frame F
+# (..., 4, 4) and the body twists vee(F^-1 dF/dparam) (..., 6) of its parameters.
+
+def _unit(v, what):
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(~(n > 0.0)):
+        raise ValueError(f"{what} is degenerate (zero or non-finite) at the given parameter values")
+    return v / n, n
+
+
+def _dot(a, b):
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _surface_frame(surface, u, v):
+    """Contact frame of a surface: origin S(u, v), x = unit Su, z = unit (Su x Sv), y = z x x."""
+    S, Su, Sv, Suu, Suv, Svv = _check_surface(surface).evaluate2(u, v)
+    x, a = _unit(Su, "surface: the u tangent")
+    z, nb = _unit(np.cross(Su, Sv), "surface: the normal (Su x Sv)")
+    y = np.cross(z, x)
+    R = np.stack([x, y, z], axis=-1)
+    F = transform(R, S)
+    twists = []
+    for dS, dSu, db in ((Su, Suu, np.cross(Suu, Sv) + np.cross(Su, Suv)),
+                        (Sv, Suv, np.cross(Suv, Sv) + np.cross(Su, Svv))):
+        dx = (dSu - x * _dot(x, dSu)[..., None]) / a
+        dz = (db - z * _dot(z, db)[..., None]) / nb
+        # body angular velocity of [x y z]: (z.dy, x.dz, y.dx), z.dy = -y.dz
+        w = np.stack([-_dot(y, dz), _dot(x, dz), _dot(y, dx)], axis=-1)
+        twists.append(np.concatenate([_rt(R, dS), w], axis=-1))
+    return F, twists
+
+
+def _curve_frame(curve, u):
+    """Contact frame of a planar curve: origin C(u), x = unit tangent in the xy plane, z = +z."""
+    C, d, dd = _check_curve(curve).evaluate(u)
+    sp2 = d[..., 0] ** 2 + d[..., 1] ** 2
+    if np.any(~(sp2 > 0.0)):
+        raise ValueError("curve: the tangent has no component in the pair frame's xy plane "
+                         "(planar curve pairs need curves in planes parallel to it)")
+    F = compose(transform(np.eye(3), C), rot_z(np.arctan2(d[..., 1], d[..., 0])))
+    dalpha = (d[..., 0] * dd[..., 1] - d[..., 1] * dd[..., 0]) / sp2
+    R = F[..., :3, :3]
+    w = np.zeros(d.shape)
+    w[..., 2] = dalpha
+    return F, np.concatenate([_rt(R, d), w], axis=-1)
+
+
+def _rot_body(R, twist):
+    """Ad(Rot^-1) of a pure rotation ``R`` (..., 3, 3) applied to body twists: (R^T v, R^T w)."""
+    return np.concatenate([_rt(R, twist[..., :3]), _rt(R, twist[..., 3:])], axis=-1)
+
+
+def _flip(flag, shape):
+    """Rx(pi) where ``flag`` is False (surface normals opposed), identity where True."""
+    f = np.broadcast_to(np.asarray(flag, dtype=bool), shape)
+    return np.where(f[..., None, None], np.eye(4), np.diag([1.0, -1.0, -1.0, 1.0]))
+
+
+def _turn(flag, shape):
+    """Rz(pi) where ``flag`` is False (curve tangents opposed), identity where True."""
+    f = np.broadcast_to(np.asarray(flag, dtype=bool), shape)
+    return np.where(f[..., None, None], np.eye(4), np.diag([-1.0, -1.0, 1.0, 1.0]))
+
+
+def _contact_chain(F1, tw1, B, twB, F2, tw2):
+    """Body twists of ``M = F1 B F2^-1``: ``Ad(F2) [Ad(B^-1) xi_F1 + xi_B - xi_F2]``.
+
+    ``tw1``, ``twB``, ``tw2``: lists of body twists of F1, B and F2 (one per
+    value they depend on), returned in that order. ``B`` is a pure rotation."""
+    A2 = adjoint(F2)
+    RB = B[..., :3, :3]
+    out = [np.einsum("...ij,...j->...i", A2, _rot_body(RB, t)) for t in tw1]
+    out += [np.einsum("...ij,...j->...i", A2, t) for t in twB]
+    out += [-np.einsum("...ij,...j->...i", A2, t) for t in tw2]
+    return out
+
+
+# point_on_surface: q = (u, v, yaw, pitch, roll); M = Trans(S(u, v)) Rx(roll) Ry(pitch) Rz(yaw)
+# point_on_planar_curve: q = (u, yaw, pitch, roll); M = Trans(C(u)) Rx(roll) Ry(pitch) Rz(yaw)
+# The orientation is the second pair frame's relative to the first pair frame's axes (as for the
+# spherical and unconstrained pairs), not to a tangent frame: the corpus convention.
+
+def _check_surface(surface):
+    if not hasattr(surface, "evaluate2"):
+        raise TypeError(f"surface parameter must be a p105cli.kinematics.geometry surface, got {surface!r}")
+    return surface
+
+
+def _check_curve(curve):
+    if not hasattr(curve, "evaluate"):
+        raise TypeError(f"curve parameter must be a p105cli.kinematics.geometry curve, got {curve!r}")
+    return curve
+
+
+def _point_m(P, ypr):
+    return transform(ypr_rotation(*ypr), P)
+
+
+def _point_j(dPs, ypr, shape):
+    Y = ypr_rotation(*ypr)
+    wy, wp, wr = _ypr_body_axes(*np.broadcast_arrays(ypr[0], ypr[1]))
+    return _col([_twist(v=_rt(Y, d), shape=shape) for d in dPs]
+                + [_twist(w=wy, shape=shape), _twist(w=wp, shape=shape), _twist(w=wr, shape=shape)], shape)
+
+
+def _finite(x, what):
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{what} is not finite at the given parameter values")
+    return x
+
+
+def _pos_m(q, p):
+    S, _, _ = _check_surface(p["surface"]).evaluate(q[0], q[1])
+    return _point_m(_finite(S, "surface point"), q[2:5])
+
+
+def _pos_j(q, p, shape):
+    _, Su, Sv = _check_surface(p["surface"]).evaluate(q[0], q[1])
+    return _point_j([Su, Sv], q[2:5], shape)
+
+
+def _popc_m(q, p):
+    C, _, _ = _check_curve(p["curve"]).evaluate(q[0])
+    return _point_m(_finite(C, "curve point"), q[1:4])
+
+
+def _popc_j(q, p, shape):
+    _, d, _ = _check_curve(p["curve"]).evaluate(q[0])
+    return _point_j([d], q[1:4], shape)
+
+
+# sliding_surface: q = (u1, v1, u2, v2, rotation);
+# M = F1(u1, v1) Rz(rotation) Rx(pi)^[not orientation] F2(u2, v2)^-1
+
+def _surface_contact(q5, p, shape):
+    F1, tw1 = _surface_frame(p["surface_1"], q5[0], q5[1])
+    F2, tw2 = _surface_frame(p["surface_2"], q5[2], q5[3])
+    fl = _flip(p["orientation"], shape)
+    B = compose(rot_z(q5[4]), fl)
+    return F1, tw1, B, fl, F2, tw2
+
+
+def _ss_m(q, p):
+    F1, _, B, _, F2, _ = _surface_contact(q, p, p["_shape"])
+    return compose(F1, B, inverse(F2))
+
+
+def _ss_cols(q5, p, shape):
+    F1, tw1, B, fl, F2, tw2 = _surface_contact(q5, p, shape)
+    twB = _rot_body(fl[..., :3, :3], _twist(w=_EZ, shape=shape))    # B^-1 dB/drotation = Fl^T z^ Fl
+    c = _contact_chain(F1, tw1, B, [twB], F2, tw2)
+    return [c[0], c[1], c[3], c[4], c[2]]                             # u1, v1, u2, v2, rotation
+
+
+def _ss_j(q, p, shape):
+    return _col(_ss_cols(q, p, shape), shape)
+
+
+# rolling_surface: q = (u1, v1, rotation); (u2, v2) = param point_on_surface_2 (non-holonomic state)
+
+def _rs_q5(q, p, shape):
+    if p["point_on_surface_2"] is None:
+        raise ValueError("rolling surface pair: pass point_on_surface_2 = (u2, v2), the contact point on "
+                         "surface_2: rolling surfaces is non-holonomic, so it is state to carry along "
+                         "(integrate it with rolling_surface_rates), not a function of the pair values")
+    w = np.asarray(p["point_on_surface_2"], dtype=np.float64)
+    if w.shape[-1:] != (2,):
+        raise ValueError("rolling surface pair: point_on_surface_2 must have shape (..., 2) (u2, v2)")
+    u2 = np.broadcast_to(w[..., 0], shape)
+    v2 = np.broadcast_to(w[..., 1], shape)
+    return [q[0], q[1], u2, v2, q[2]]
+
+
+def _rs_m(q, p):
+    return _ss_m(_rs_q5(q, p, p["_shape"]), p)
+
+
+def _rolling_rates(q5, p, shape):
+    """d(u2, v2)/d(u1, v1, rotation) (..., 2, 3) for no slip, and the five sliding columns."""
+    cols = _ss_cols(q5, p, shape)
+    S2, S2u, S2v = p["surface_2"].evaluate(q5[2], q5[3])
+    ta, _ = _unit(S2u, "surface_2: the u tangent")
+    n, _ = _unit(np.cross(S2u, S2v), "surface_2: the normal")
+    tb = np.cross(n, ta)
+
+    def slip(t):        # tangential velocity of the material point of link 2 at the contact, frame-2 axes
+        c = t[..., :3] + np.cross(t[..., 3:], S2)
+        return np.stack([_dot(ta, c), _dot(tb, c)], axis=-1)
+
+    G = np.stack([slip(cols[2]), slip(cols[3])], axis=-1)                 # (..., 2, 2)
+    Q = np.stack([slip(cols[0]), slip(cols[1]), slip(cols[4])], axis=-1)  # (..., 2, 3)
+    if np.any(~(np.abs(np.linalg.det(G)) > 0.0)):
+        raise ValueError("rolling surface pair: the contact is degenerate (no-slip rates undefined)")
+    return -np.linalg.solve(G, Q), cols
+
+
+def rolling_surface_rates(q, *, surface_1, surface_2, orientation, point_on_surface_2) -> np.ndarray:
+    """``d(u2, v2) / d(u1, v1, rotation)`` of a rolling surface pair: (..., 2, 3).
+
+    Rolling of surfaces is non-holonomic: the contact point on ``surface_2``
+    is state to integrate with these rates, not a function of the values."""
+    t = PAIR_KINDS["rolling_surface"]
+    qs, p, shape = t._args(q, dict(surface_1=surface_1, surface_2=surface_2, orientation=orientation,
+                                   point_on_surface_2=point_on_surface_2))
+    return _rolling_rates(_rs_q5(qs, p, shape), p, shape)[0]
+
+
+def _rs_j(q, p, shape):
+    rates, cols = _rolling_rates(_rs_q5(q, p, shape), p, shape)
+    out = []
+    for i, k in enumerate((0, 1, 4)):
+        out.append(cols[k] + cols[2] * rates[..., 0, i, None] + cols[3] * rates[..., 1, i, None])
+    return _col(out, shape)
+
+
+# sliding_curve: q = (u1, u2); M = F1(u1) Rz(pi)^[not orientation] F2(u2)^-1
+
+def _sc_m(q, p):
+    F1, _ = _curve_frame(p["curve_1"], q[0])
+    F2, _ = _curve_frame(p["curve_2"], q[1])
+    return compose(F1, _turn(p["orientation"], p["_shape"]), inverse(F2))
+
+
+def _sc_cols(u1, u2, p, shape):
+    F1, t1 = _curve_frame(p["curve_1"], u1)
+    F2, t2 = _curve_frame(p["curve_2"], u2)
+    return _contact_chain(F1, [t1], _turn(p["orientation"], shape), [], F2, [t2])
+
+
+def _sc_j(q, p, shape):
+    return _col(_sc_cols(q[0], q[1], p, shape), shape)
+
+
+# rolling_curve: q = (u1,); u2 from s2(ref2 -> u2) = sigma s1(ref1 -> u1), sigma = +1 (orientation) / -1
+
+def _rc_u2(u1, p, shape):
+    from .geometry import arc_length, parameter_at_arc_length
+    sigma = np.where(np.broadcast_to(np.asarray(p["orientation"], dtype=bool), shape), 1.0, -1.0)
+    r1 = np.broadcast_to(_f(p["reference_parameter_1"]), shape)
+    r2 = np.broadcast_to(_f(p["reference_parameter_2"]), shape)
+    s1 = arc_length(p["curve_1"], r1, u1)
+    return parameter_at_arc_length(p["curve_2"], r2, sigma * s1), sigma
+
+
+def _rc_m(q, p):
+    u2, _ = _rc_u2(q[0], p, p["_shape"])
+    return _sc_m([q[0], u2], p)
+
+
+def _rc_j(q, p, shape):
+    u2, sigma = _rc_u2(q[0], p, shape)
+    c1, c2 = _sc_cols(q[0], u2, p, shape)
+    sp1 = np.linalg.norm(p["curve_1"].evaluate(q[0])[1], axis=-1)
+    sp2 = np.linalg.norm(p["curve_2"].evaluate(u2)[1], axis=-1)
+    du2 = sigma * sp1 / sp2
+    return _col([c1 + c2 * du2[..., None]], shape)
+
+
+# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz); M = T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz), locked values 0
+
+_FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
+
+
+def _low_check(q, p):
+    for i, f in enumerate(_FLAGS):
+        if not p[f] and np.any(q[i] != 0.0):
+            raise ValueError(f"low order kinematic pair: {f} = FALSE locks value {i + 1} "
+                             f"({LOW_ORDER.value_names[i]}), which must be 0")
+
+
+def _low_m(q, p):
+    _low_check(q, p)
+    t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
+    return transform(ypr_rotation(q[5], q[4], q[3]), t)
+
+
+def _low_j(q, p, shape):
+    _low_check(q, p)
+    R = ypr_rotation(q[5], q[4], q[3])
+    cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
+    wz, wy, wx = _ypr_body_axes(*np.broadcast_arrays(q[5], q[4]))
+    cols += [_twist(w=wx, shape=shape), _twist(w=wy, shape=shape), _twist(w=wz, shape=shape)]
+    return _col([c if p[f] else np.zeros(shape + (6,)) for c, f in zip(cols, _FLAGS)], shape)
+
+
+# spherical_pair_with_pin: q = (yaw, pitch, roll) of its spherical_pair_value; AP242 derives r_y, r_z
+# free and r_x locked, so roll (about x) must be 0: M = Ry(pitch) Rz(yaw)
+
+def _pin_check(q):
+    if np.any(q[2] != 0.0):
+        raise ValueError("spherical pair with pin: r_x = FALSE (AP242 DERIVE) locks the roll, which must be 0")
+
+
+def _pin_m(q, p):
+    _pin_check(q)
+    return _spherical_m(q, p)
+
+
+def _pin_j(q, p, shape):
+    _pin_check(q)
+    J = _spherical_j(q, p, shape).copy()
+    J[..., 2] = 0.0
+    return J
 
 
 # --------------------------------------------------------------------------- the type
@@ -480,9 +820,10 @@ class PairType:
             raise TypeError(f"{self.kind} pair: missing parameter(s) {missing}")
         shape = q.shape[:-1]
         for k, v in p.items():
-            if k == "layout" or v is None:
+            if k in _NOT_BATCHED or v is None:
                 continue
-            shape = np.broadcast_shapes(shape, np.shape(v))
+            vs = np.shape(v)[:-1] if k in _POINT_PARAMS else np.shape(v)
+            shape = np.broadcast_shapes(shape, vs)
         qs = [np.broadcast_to(q[..., i], shape) for i in range(n)]
         p["_shape"] = shape
         return qs, p, shape
@@ -515,6 +856,11 @@ class PairType:
         return self.motion(q, **params)
 
 
+#: Parameters that are not numbers to broadcast (geometry objects, the layout name).
+_NOT_BATCHED = frozenset({"layout", "surface", "curve", "surface_1", "surface_2", "curve_1", "curve_2"})
+#: Parameters whose last axis is a point's coordinates, not a batch axis.
+_POINT_PARAMS = frozenset({"point_on_surface_2"})
+
 REVOLUTE = PairType("revolute", ("actual_rotation",), (), _revolute_m, _revolute_j)
 PRISMATIC = PairType("prismatic", ("actual_translation",), (), _prismatic_m, _prismatic_j,
                      {"layout": "1996"})
@@ -536,10 +882,34 @@ GEAR = PairType("gear", ("actual_rotation_1",), ("radius_first_link", "radius_se
 RACK_AND_PINION = PairType("rack_and_pinion", ("actual_displacement",), ("pinion_radius",),
                            _rack_m, _rack_j)
 
+POINT_ON_SURFACE = PairType("point_on_surface", ("point_parameter_u", "point_parameter_v", "yaw", "pitch",
+                                                  "roll"), ("surface",), _pos_m, _pos_j)
+SLIDING_SURFACE = PairType("sliding_surface", ("point_parameter_u_1", "point_parameter_v_1", "point_parameter_u_2",
+                                                "point_parameter_v_2", "actual_rotation"),
+                           ("surface_1", "surface_2", "orientation"), _ss_m, _ss_j)
+ROLLING_SURFACE = PairType("rolling_surface", ("point_parameter_u", "point_parameter_v", "actual_rotation"),
+                           ("surface_1", "surface_2", "orientation"), _rs_m, _rs_j, {"point_on_surface_2": None})
+POINT_ON_PLANAR_CURVE = PairType("point_on_planar_curve", ("point_parameter", "yaw", "pitch", "roll"),
+                                 ("curve",), _popc_m, _popc_j, {"orientation": True})
+SLIDING_CURVE = PairType("sliding_curve", ("point_parameter_1", "point_parameter_2"),
+                         ("curve_1", "curve_2", "orientation"), _sc_m, _sc_j)
+ROLLING_CURVE = PairType("rolling_curve", ("point_parameter_1",), ("curve_1", "curve_2", "orientation"),
+                         _rc_m, _rc_j, {"reference_parameter_1": 0.0, "reference_parameter_2": 0.0})
+LOW_ORDER = PairType("low_order", ("actual_translation_x", "actual_translation_y", "actual_translation_z",
+                                   "actual_rotation_x", "actual_rotation_y", "actual_rotation_z"), (),
+                     _low_m, _low_j, {f: True for f in _FLAGS})
+SPHERICAL_WITH_PIN = PairType("spherical_with_pin", ("yaw", "pitch", "roll"), (), _pin_m, _pin_j)
+
+#: The higher pairs (ISO 10303-105 5.1: pairs 12-17), which need curve/surface geometry.
+HIGHER_KINDS = ("point_on_surface", "sliding_surface", "rolling_surface", "point_on_planar_curve",
+                "sliding_curve", "rolling_curve")
+
 #: Pair types by short name.
 PAIR_KINDS = {t.kind: t for t in (REVOLUTE, PRISMATIC, SCREW, CYLINDRICAL, SPHERICAL, UNIVERSAL,
                                   HOMOKINETIC, PLANAR, UNCONSTRAINED, FULLY_CONSTRAINED, GEAR,
-                                  RACK_AND_PINION)}
+                                  RACK_AND_PINION, POINT_ON_SURFACE, SLIDING_SURFACE, ROLLING_SURFACE,
+                                  POINT_ON_PLANAR_CURVE, SLIDING_CURVE, ROLLING_CURVE, LOW_ORDER,
+                                  SPHERICAL_WITH_PIN)}
 
 #: Pair types by Part 105 entity name, for both layouts: the 1996 text / AP214 names
 #: (``*_pair``; its ranges are separate ``*_pair_range`` entities, not pairs) and
@@ -548,18 +918,21 @@ PAIR_KINDS = {t.kind: t for t in (REVOLUTE, PRISMATIC, SCREW, CYLINDRICAL, SPHER
 #: defaults to the AP242 layout (slide along x). Pass ``layout=`` to override.
 PAIRS = {}
 for _t in PAIR_KINDS.values():
+    if _t.kind in ("low_order", "spherical_with_pin"):
+        continue
     PAIRS[f"{_t.kind}_pair"] = _t
-    if _t.kind not in ("homokinetic", "unconstrained", "fully_constrained"):
+    if _t.kind not in ("homokinetic", "unconstrained", "fully_constrained", "sliding_surface",
+                       "rolling_surface", "sliding_curve", "rolling_curve"):
         PAIRS[f"{_t.kind}_pair_with_range"] = _t
 PAIRS["prismatic_pair_with_range"] = PRISMATIC.with_defaults(layout="ap242")
+PAIRS["low_order_kinematic_pair"] = LOW_ORDER
+PAIRS["low_order_kinematic_pair_with_range"] = LOW_ORDER
+PAIRS["spherical_pair_with_pin"] = SPHERICAL_WITH_PIN
+PAIRS["spherical_pair_with_pin_and_range"] = SPHERICAL_WITH_PIN
 del _t
 
 #: Entity names of pairs whose motion is not defined here (see the module docstring).
 NOT_IMPLEMENTED = (
-    "point_on_surface_pair", "point_on_surface_pair_with_range", "sliding_surface_pair",
-    "rolling_surface_pair", "point_on_planar_curve_pair", "point_on_planar_curve_pair_with_range",
-    "sliding_curve_pair", "rolling_curve_pair", "low_order_kinematic_pair",
-    "low_order_kinematic_pair_with_range", "spherical_pair_with_pin", "spherical_pair_with_pin_and_range",
     "linear_flexible_and_pinion_pair", "linear_flexible_and_planar_curve_pair",
 )
 
@@ -575,5 +948,5 @@ def pair_type(entity_name: str) -> PairType:
         return PAIRS[name]
     if name in NOT_IMPLEMENTED:
         raise UnsupportedPairError(f"{name}: the motion of this pair type is not implemented "
-                                   "(higher pairs need Part 42 curve/surface evaluation)")
+                                   "(flexible pairs: their flexible element's geometry is not rigid)")
     raise KeyError(f"{entity_name!r} is not a Part 105 pair entity name known to p105cli")
