@@ -133,3 +133,68 @@ def test_1996_paths_have_no_geometry_and_say_so():
     r = run_cli("interpolate", "--what", "paths", ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp")
     assert r.returncode == 1
     assert b"#227" in r.stderr and b"without geometry" in r.stderr
+
+
+def test_curve_based_segment_on_a_circle_entity(tmp_path):
+    """A curve_based_path on a Part 42 circle through both nodes (centre solved here)."""
+    text = FOUR_BAR.read_text()
+    T1, T2 = axis2(text, 235), axis2(text, 240)
+    p1, p2, via = T1[:3, 3] * 1e3, T2[:3, 3] * 1e3, np.array([120.0, 155.0, 0.0])
+    P = np.array([p1, via, p2])
+    A = 2 * (P[1:, :2] - P[0, :2])
+    b = np.sum(P[1:, :2] ** 2, axis=1) - np.sum(P[0, :2] ** 2)
+    c = np.linalg.solve(A, b)
+    rad = float(np.linalg.norm(p1[:2] - c))
+    text = text.replace("#241=POINT_TO_POINT_PATH(1.,*,#240);",
+                        "#241=CURVE_BASED_PATH(1.,.CONTINUOUS.,#240,#901);\n"
+                        f"#900=CARTESIAN_POINT('',({float(c[0])!r},{float(c[1])!r},0.));\n"
+                        "#902=DIRECTION('',(0.,0.,1.));\n#903=DIRECTION('',(1.,0.,0.));\n"
+                        "#904=AXIS2_PLACEMENT_3D('',#900,#902,#903);\n"
+                        f"#901=CIRCLE('',#904,{rad!r});")
+    f = tmp_path / "curve.stp"
+    f.write_text(text)
+    r = run_cli("interpolate", "--what", "paths", "--count", "51", f)
+    assert r.returncode == 0, r.stderr
+    frames = [x for x in records(r.stdout) if x["type"] == "frame"]
+    T = np.array([x["matrix"] for x in frames])
+    t = np.array([x["t"] for x in frames])
+    on = t >= 0.5
+    assert np.abs(np.linalg.norm(T[on, :2, 3] - c * 1e-3, axis=1) - rad * 1e-3).max() < 1e-12
+    # the circle's parameter (angle) moves linearly in t, counter-clockwise (the circle's sense)
+    ang = np.unwrap(np.arctan2(T[on, 1, 3] - c[1] * 1e-3, T[on, 0, 3] - c[0] * 1e-3))
+    assert np.ptp(np.diff(ang)) < 1e-9 and np.all(np.diff(ang) > 0)
+    assert np.abs(T[-1] - T2).max() < 1e-12
+
+
+@pytest.mark.parametrize("profile", ["ap214", "ap242"])
+@pytest.mark.parametrize("key", ["four_bar", "slider_crank"])
+def test_configuration_sequences_against_the_corpus_solver(key, profile):
+    """The motion program's configurations are the corpus generator's solved states
+    (computed here from its own position solver), linearly interpolated between them."""
+    from p105cli.corpus import MECHANISMS, configuration
+
+    mech = MECHANISMS[key]()
+    axis = 0 if profile == "ap242" else 2
+    truth = [configuration(mech, d, axis) for d in mech.drives]
+    names = [p.name for p in mech.pairs]
+
+    def si(state):  # corpus values: radians and millimetres
+        out = {}
+        for p in mech.pairs:
+            (v,) = state[p.name].values()
+            out[p.name] = v * (1e-3 if p.kind in ("prismatic", "rack_and_pinion") else 1.0)
+        return out
+
+    f = ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp"
+    r = run_cli("interpolate", "--what", "configurations", "--t", "0", "--t", "0.25", "--t", "0.5",
+                "--t", "1", "--no-nodes", f)
+    assert r.returncode == 0, r.stderr
+    recs = [x for x in records(r.stdout) if x["type"] == "configuration"]
+    assert [x["t"] for x in recs] == [0.0, 0.25, 0.5, 1.0]
+    nodes = [si(s) for s in truth]
+    expect = [nodes[0], {n: 0.5 * (nodes[0][n] + nodes[1][n]) for n in names}, nodes[1], nodes[2]]
+    for rec, want in zip(recs, expect):
+        assert set(rec["pairs"]) == set(names)
+        for n in names:
+            assert rec["pairs"][n] == pytest.approx(want[n], rel=1e-12, abs=1e-13)
+    assert recs[1]["interpolation"] == "linear" and recs[1]["prescribed"] is True

@@ -113,6 +113,25 @@ def load_document(path: str | None):
     return doc
 
 
+@contextlib.contextmanager
+def naming_source(doc):
+    """Errors found in a model while analysing it name its file: a ModelError raised
+    deep in the science knows the ``#id`` but not where the model came from. An
+    unknown FILE_SCHEMA is a usage error naming the file too."""
+    from p105cli.schema.profiles import UnknownSchemaError
+    from p105cli.step.errors import StepError
+
+    source = getattr(doc, "source", None) or "<input>"
+    try:
+        yield
+    except StepError as err:
+        if err.source in (None, "<input>"):
+            err.source = source
+        raise
+    except UnknownSchemaError as err:
+        raise InputError(f"{source}: {err}") from None
+
+
 # ---------------------------------------------------------------- output
 
 def _stdout_text() -> io.TextIOWrapper:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, diag, load_document, open_output, report_warnings
-from .options import input_argument, output_option
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, load_document, naming_source, open_output, \
+    report_warnings
+from .options import input_argument, output_option, schema_option
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
@@ -30,8 +31,9 @@ from .options import input_argument, output_option
 @click.option("--ypr", is_flag=True, help="Add each frame's rotation as ypr angles (ISO 10303-105 Annex E), radians.")
 @click.option("--to", "to", type=click.Choice(["jsonl", "csv"]), default="jsonl", show_default=True,
               help="JSON Lines records, or a CSV table (needs --what paths or --what configurations).")
+@schema_option
 @output_option
-def interpolate(input, what, paths, sequences, t_values, step, count, nodes, quaternion, ypr, to, output):
+def interpolate(input, what, paths, sequences, t_values, step, count, nodes, quaternion, ypr, to, schema, output):
     """Sample the model's kinematic paths and configuration sequences at parameter values t.
 
     Paths (AP242 kinematic_path_defined_by_nodes: point-to-point, linear,
@@ -71,20 +73,20 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
                          nodes=(step is not None or given == 0) if nodes is None else nodes,
                          quaternion=quaternion, ypr=ypr)
     try:
-        result = sampling.sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan)
+        with naming_source(doc):
+            result = sampling.sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
+                                           profile=schema)
     except sampling.SamplingError as err:
-        from .contract import InputError
         raise InputError(f"{_source(doc)}: {err}") from None
     for inst, msg in result.skipped:
         diag("warning", f"{_source(doc)}: #{inst}: {msg}")
     try:
-        with open_output(output, (input,)) as out:
+        with naming_source(doc), open_output(output, (input,)) as out:
             if to == "jsonl":
                 sampling.write_jsonl(result, out)
             else:
                 sampling.write_csv(result, out, what)
     except sampling.SamplingError as err:
-        from .contract import InputError
         raise InputError(f"{_source(doc)}: {err}") from None
     report_warnings(doc)
     if not result.path_list and not result.sequence_list:

@@ -13,3 +13,8 @@ output_option = click.option(
 stream_option = click.option(
     "--stream", is_flag=True,
     help="JSON Lines: a header record, then one instance per line (for very large files).")
+
+schema_option = click.option(
+    "--schema", type=click.Choice(["ap214", "ap242", "p105"]), default=None,
+    help="Schema profile of the input (default: from FILE_SCHEMA; a 1996-layout file with "
+         "su_parameters is read as p105).")

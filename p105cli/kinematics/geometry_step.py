@@ -117,6 +117,16 @@ def _placement(pop, inst, lf) -> np.ndarray:
         raise ModelError(f"#{inst.id} (axis2_placement_3d): {exc}", f"#{inst.id}") from None
 
 
+def placement_from_instance(pop, inst, length_factor: float = 1.0) -> np.ndarray:
+    """An ``axis2_placement_3d`` instance as a 4x4 (location scaled by ``length_factor``)."""
+    return _placement(pop, inst, length_factor)
+
+
+def point_from_instance(pop, inst, length_factor: float = 1.0) -> np.ndarray:
+    """A 3D ``cartesian_point`` instance as a (3,) array scaled by ``length_factor``."""
+    return _point(pop, inst, length_factor)
+
+
 def _is_true(v) -> bool:
     return isinstance(v, dict) and v.get("enum") == "T"
 

@@ -68,6 +68,9 @@ class Units:
 #: SI units (metre, radian).
 SI = Units()
 
+#: Keys of ``Pair.params`` that describe the pair frames, not the motion.
+FRAME_PARAMS = ("su_1", "su_2")
+
 
 @dataclass(frozen=True)
 class Link:
@@ -149,8 +152,13 @@ class Pair:
         return self.type.value_names
 
     def motion_params(self) -> dict:
-        """The keyword parameters of :meth:`PairType.motion` for this pair."""
-        return dict(self.params)
+        """The keyword parameters of :meth:`PairType.motion` for this pair.
+
+        ``params["su_1"]``/``params["su_2"]`` (the Sheth-Uicker parameters
+        ``(a, alpha, b, beta, c, gamma)`` of ``P1``/``P2``, SI, when the pair
+        frames are su_parameters) describe the frames, not the motion, and
+        are left out."""
+        return {k: v for k, v in self.params.items() if k not in FRAME_PARAMS}
 
     def motion(self, q) -> np.ndarray:
         """``M(q)`` (..., 4, 4) for values ``q`` (..., n) in SI."""

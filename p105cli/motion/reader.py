@@ -72,22 +72,11 @@ def _holder(pop, path_id: int):
 
 
 def _placement(pop, pid: Optional[int], length: float) -> np.ndarray:
-    """An axis2_placement_3d as a 4x4 (translation in metres)."""
-    from p105cli.kinematics.placements import axis2_placement_3d
+    from p105cli.kinematics.geometry_step import placement_from_instance
 
-    if pid is None:
+    if pid is None or pid not in pop:
         raise ValueError("missing placement")
-    p = pop.instance(pid)
-    if "axis2_placement_3d" not in p.types:
-        raise ValueError(f"#{pid} is a {sorted(p.leaf_types)}, not an axis2_placement_3d")
-    loc = pop.instance(_ref(p.get("location")))
-    xyz = np.array([_num(x) for x in loc.get("coordinates")]) * length
-
-    def direction(attr):
-        r = _ref(p.get(attr))
-        return None if r is None else [_num(x) for x in pop.instance(r).get("direction_ratios")]
-
-    return axis2_placement_3d(xyz, direction("axis"), direction("ref_direction"))
+    return placement_from_instance(pop, pop.instance(pid), length)
 
 
 def _link_name(pop, rep_id: Optional[int]) -> Optional[str]:
@@ -148,8 +137,8 @@ def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult
                 t_end = _num(seg.get("t_end"))
                 via = curve = None
                 if kind == "circular":
-                    vp = pop.instance(_ref(seg.get("via_point")))
-                    via = np.array([_num(x) for x in vp.get("coordinates")]) * length
+                    from p105cli.kinematics.geometry_step import point_from_instance
+                    via = point_from_instance(pop, pop.instance(_ref(seg.get("via_point"))), length)
                 elif kind == "curve_based":
                     from p105cli.kinematics.geometry_step import curve_from_instance
                     curve = curve_from_instance(pop, pop.instance(_ref(seg.get("path_curve"))), length, angle)
@@ -204,7 +193,7 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
     mechanism reader names them), the pair kinds by name, and ``(#id, message)``
     for sequences that could not be read."""
     from p105cli.schema.population import Population
-    from p105cli.kinematics.reader import pair_values, read_mechanisms
+    from p105cli.kinematics.reader import PairValueReader
     from .configurations import ConfigurationNode, ConfigurationSequence
 
     pop = pop or Population(doc, profile)
@@ -212,8 +201,8 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
         if "interpolated_configuration_sequence" in pop.schema.entities else []
     if not seq_ids:
         return [], {}, []
-    mechs = read_mechanisms(pop)
-    kinds = {p.name: p.kind for m in mechs for p in m.pairs}
+    values = PairValueReader(pop)
+    kinds = {p.name: p.kind for m in values.mechanisms for p in m.pairs}
     out, skipped = [], []
     for sid in seq_ids:
         seq = pop.instance(sid)
@@ -222,9 +211,9 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
             for v in seq.get("segments") or []:
                 seg = pop.instance(_ref(v))
                 state = pop.instance(_ref(seg.get("state")))
-                values = pair_values(pop, mechs, [_ref(x) for x in state.get("items") or []])
                 t = _num(seg.get("t_parameter"))
-                nodes[t] = ConfigurationNode(t, values, _interpolation(seg), state.get("name") or "", state.id)
+                nodes[t] = ConfigurationNode(t, values.values([_ref(x) for x in state.get("items") or []]),
+                                             _interpolation(seg), state.get("name") or "", state.id)
             name = seq.get("name") or f"#{sid}"
             closed = bool(nodes) and list(nodes.values())[-1].interpolation != "discontinuous"
         else:  # 1996: a set of configuration_interpolation(previous, next, interpolation)
@@ -235,8 +224,7 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
                     cd = pop.instance(_ref(ci.get(attr)))
                     t = _num(cd.get("t_parameter"))
                     if t not in nodes:
-                        values = pair_values(pop, mechs, [_ref(x) for x in cd.get("pair_values") or []])
-                        nodes[t] = (values, cd.id)
+                        nodes[t] = (values.values([_ref(x) for x in cd.get("pair_values") or []]), cd.id)
                 prev_t = _num(pop.instance(_ref(ci.get("previous_configuration_definition"))).get("t_parameter"))
                 laws[prev_t] = _interpolation(ci)
             last = max(nodes) if nodes else None

@@ -129,9 +129,9 @@ def sample_model(doc, *, what: str = "all", paths=(), sequences=(), plan: Plan =
                  profile: str | None = None) -> SampledModel:
     """Read what ``what`` asks for and check the request; sampling happens as the
     records are drawn from the returned :class:`SampledModel`."""
-    from p105cli.schema.population import Population
+    from p105cli.kinematics.reader import population
 
-    pop = Population(doc, profile)
+    pop, _ = population(doc, profile)
     out = SampledModel(plan=plan)
     if what in ("all", "paths"):
         from .reader import read_paths
