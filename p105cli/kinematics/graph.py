@@ -1,0 +1,647 @@
+"""Structure analysis of a mechanism: its graph, loops and mobility.
+
+A mechanism is a graph with the **links as vertices and the joints (pairs) as
+edges** (ISO 10303-105:1996 clause 1 and 5.4.70). :func:`analyse` finds
+
+* a **spanning tree** grown breadth-first from the base link (each further
+  connected component from its first link in model order), with the link
+  order (``order``) and the tree edges ``(pair, parent, child, forward)``;
+  ``forward`` is True when the pair's first link is the parent;
+* one **independent loop per chord** (a pair not in the tree): the chord
+  traversed from its first to its second link, then the tree path back
+  (``joints - links + components`` loops in all, the cyclomatic number);
+  each loop is a list of ``(pair, forward)`` in traversal order, ``forward``
+  True when the pair is crossed from its first to its second link;
+* whether it is a **tree** (no loop) or a **network**;
+* its **mobility** two ways. Gruebler-Kutzbach counts
+  ``6 (links - 1 - joints) + sum(pair freedoms)`` (a component not connected
+  to the base link floats and counts its 6 rigid-body freedoms). The rank
+  method takes the loop-closure Jacobian ``J`` at the initial state:
+  ``mobility = freedoms - rank(J) (+ 6 per floating component)`` and
+  ``redundant_constraints = 6 loops - rank(J)``, so that
+  ``mobility = mobility_gruebler + redundant_constraints`` always. A planar
+  four-bar modelled in 3D: Gruebler -2, rank 3, mobility 1, 3 redundant.
+  The rank is an *instantaneous* mobility: at a singular configuration
+  (a folded linkage) it exceeds the finite mobility.
+
+Redundant constraints are carried by joints: a vector ``w`` of the left null
+space of ``J`` is a self-stress (loop wrenches that load the joints but do no
+work on any freedom); joint ``j`` carries it when the sum of the wrenches of
+the loops through ``j`` (signed by the traversal direction) is not zero.
+``redundant_joints`` lists those joints.
+
+**Loop closure** (:func:`loop_closure`, also the solver's Newton system). For
+loop ``l`` starting at link ``a`` (the chord's first link), walking the pair
+transforms ``T_link1_link2(q)`` (inverted where a pair is crossed backwards)
+round the loop gives ``T_loop(q)``, the placement of link ``a`` reached
+round the loop in link ``a`` as it started; closed means ``T_loop = I``.
+The residual is ``r_l = (p, phi)``: ``p`` the translation of ``T_loop``
+(metres, in link ``a``'s frame) and ``phi`` the rotation vector of its
+rotation (radians, ``|phi| <= pi``). Its Jacobian with respect to the flat
+pair-value vector (:attr:`Mechanism.value_slices`) is exact:
+``dp = v + w x p`` and ``dphi = Jl(phi)^-1 w`` with ``(v, w)`` the spatial
+twist of ``T_loop`` (``vee(dT_loop T_loop^-1)``) and ``Jl`` the left
+Jacobian of SO(3). The twist of each pair is ``+-Ad(F) J_body`` with ``F``
+the placement of the pair's second pair frame
+(:meth:`PairType.motion_jacobian`, :func:`pairs.adjoint`).
+
+**Tolerances.** The rank is taken on a dimensionless Jacobian: translation
+rows divided, translation columns (values named ``*translation*``,
+``*displacement*``) multiplied by the model size ``L`` (the largest pair-frame
+distance, :meth:`Mechanism.size`, or of the pair frames from the base
+origin). A singular value counts as zero below ``rtol * s_max`` with
+``rtol = max(tol, min(100 * closure error, 1e-4))`` (``tol`` default 1e-8;
+the closure error is the largest loop residual at the initial state,
+translation over ``L``): a state that closes only to 1e-6 cannot resolve a
+rank finer than that; a state that does not close at all is noted.
+
+A science module: numpy only, no click.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from .pairs import UnsupportedPairError, adjoint
+from .placements import inverse, matrix_to_quaternion
+
+__all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "rotation_vector",
+           "length_columns", "structure_document", "to_dot", "to_graphml", "to_mermaid", "GRAPH_FORMAT"]
+
+#: Default relative rank tolerance (dimensionless).
+DEFAULT_TOL = 1e-8
+# A joint carries a self-stress when its (unit-basis) wrench exceeds this.
+_CARRY_TOL = 1e-6
+
+
+@dataclass
+class Component:
+    """One connected part of the mechanism's graph."""
+
+    links: list
+    root: str
+    pairs: list
+    loops: list            # indices into Structure.loops
+    floating: bool         # not connected to the base link
+    dof: int               # sum of the freedoms of its pairs
+    mobility_gruebler: int
+    mobility: Optional[int] = None
+    rank: Optional[int] = None
+    redundant_constraints: Optional[int] = None
+    redundant_joints: list = field(default_factory=list)
+    singular_values: list = field(default_factory=list)
+    closure_residual: float = 0.0
+
+
+@dataclass
+class Structure:
+    """The result of :func:`analyse`. Link and pair names throughout.
+
+    ``order``: links breadth-first from the base (then the other components);
+    ``tree``: ``(pair, parent, child, forward)`` per tree edge, in ``order``;
+    ``chords``: the pair closing each loop; ``loops``: per loop, ``(pair,
+    forward)`` in traversal order (chord first); ``mobility`` (None when a
+    pair's motion is not available), ``mobility_gruebler``,
+    ``redundant_constraints``, ``redundant_joints``, ``kind`` ("tree" or
+    "network"), ``components``, ``rank``, ``dof`` (sum of pair freedoms),
+    ``tol`` (the rank tolerance used), ``closure_residual`` (largest loop
+    residual at the initial state, dimensionless as described in the module
+    docstring), ``size`` (the length scale), ``notes`` (why something could
+    not be computed).
+    """
+
+    mechanism: str
+    base: str
+    order: list
+    tree: list
+    chords: list
+    loops: list
+    kind: str
+    components: list
+    dof: int
+    mobility_gruebler: int
+    mobility: Optional[int]
+    redundant_constraints: Optional[int]
+    redundant_joints: list
+    rank: Optional[int]
+    tol: float
+    closure_residual: float
+    size: float
+    notes: list = field(default_factory=list)
+    # internals for loop_closure: pair index per name, link parent edges
+    _pair_index: dict = field(default_factory=dict, repr=False)
+    _tree_idx: list = field(default_factory=list, repr=False)   # (pair index, parent, child, forward)
+    _roots: list = field(default_factory=list, repr=False)
+
+    @property
+    def loop_count(self) -> int:
+        return len(self.loops)
+
+
+# --------------------------------------------------------------------------- topology
+
+def _topology(mech):
+    """BFS spanning forest, chords and loops (names)."""
+    pairs = mech.pairs
+    adj = {ln.name: [] for ln in mech.links}
+    for k, p in enumerate(pairs):
+        adj[p.link1].append((k, p.link2))
+        if p.link2 != p.link1:
+            adj[p.link2].append((k, p.link1))
+    parent = {}        # link -> (pair index, parent link, forward)
+    depth = {}
+    order, tree_idx, roots, comps = [], [], [], []
+    used = set()
+    starts = [mech.base] + [ln.name for ln in mech.links if ln.name != mech.base]
+    for root in starts:
+        if root in depth:
+            continue
+        roots.append(root)
+        depth[root] = 0
+        comp = [root]
+        order.append(root)
+        queue = deque([root])
+        while queue:
+            u = queue.popleft()
+            for k, v in adj[u]:
+                if v in depth:
+                    continue
+                fwd = pairs[k].link1 == u
+                parent[v] = (k, u, fwd)
+                depth[v] = depth[u] + 1
+                used.add(k)
+                tree_idx.append((k, u, v, fwd))
+                order.append(v)
+                comp.append(v)
+                queue.append(v)
+        comps.append(comp)
+    chords = [k for k in range(len(pairs)) if k not in used]
+    loops = []
+    for c in chords:
+        a, b = pairs[c].link1, pairs[c].link2
+        up, down = [], []
+        x, y = b, a
+        while depth[x] > depth[y]:
+            k, px, fwd = parent[x]
+            up.append((k, not fwd))
+            x = px
+        while depth[y] > depth[x]:
+            k, py, fwd = parent[y]
+            down.append((k, fwd))
+            y = py
+        while x != y:
+            k, px, fwd = parent[x]
+            up.append((k, not fwd))
+            x = px
+            k, py, fwd = parent[y]
+            down.append((k, fwd))
+            y = py
+        loops.append([(c, True)] + up + down[::-1])
+    return order, tree_idx, roots, comps, chords, loops
+
+
+# --------------------------------------------------------------------------- small numerics
+
+def _hat3(v):
+    v = np.asarray(v, dtype=np.float64)
+    out = np.zeros(v.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def rotation_vector(R) -> np.ndarray:
+    """Rotation vector (..., 3) of rotation matrices (..., 3, 3): axis times angle in [0, pi]."""
+    q = matrix_to_quaternion(R)                 # w >= 0
+    w, v = q[..., 0], q[..., 1:]
+    s = np.linalg.norm(v, axis=-1)
+    angle = 2.0 * np.arctan2(s, w)
+    small = s < 1e-12
+    factor = np.where(small, 2.0 / np.where(w > 0.0, w, 1.0), angle / np.where(small, 1.0, s))
+    return v * factor[..., None]
+
+
+def _left_jacobian_inverse(phi) -> np.ndarray:
+    """``Jl(phi)^-1`` of SO(3): ``I - A/2 + c A^2``, ``A = [phi]x``."""
+    th = np.linalg.norm(phi, axis=-1)
+    A = _hat3(phi)
+    small = th < 1e-4
+    ths = np.where(small, 1.0, th)
+    c_big = 1.0 / ths ** 2 - (1.0 + np.cos(ths)) / (2.0 * ths * np.sin(ths))
+    c = np.where(small, 1.0 / 12.0 + th ** 2 / 720.0, c_big)
+    return np.eye(3) - 0.5 * A + c[..., None, None] * (A @ A)
+
+
+def length_columns(mech) -> np.ndarray:
+    """Boolean mask (n,) of the flat value vector's length-valued entries (translations)."""
+    mask = []
+    for p in mech.pairs:
+        for name in p.value_names:
+            mask.append("translation" in name or "displacement" in name)
+    return np.array(mask, dtype=bool)
+
+
+# --------------------------------------------------------------------------- kinematics
+
+def _pair_kinematics(pair, qk):
+    """(T_link1_link2, body Jacobian) of one pair for values (..., f)."""
+    t = pair.type
+    params = pair.motion_params()
+    M = t.motion(qk, **params)
+    Jb = t.motion_jacobian(qk, frame="body", **params)
+    T = pair.P1 @ M @ inverse(pair.P2)
+    return T, Jb
+
+
+def _kinematics(mech, tree_idx, roots, q, slices, needed=None):
+    """Pair transforms, link placements in their component root's frame and pair screws.
+
+    ``needed``: pair indices to evaluate (None: all). Returns dicts ``T``,
+    ``S`` (pair -> (..., 6, f) screw in root coordinates), ``X`` (link ->
+    (..., 4, 4)), and the set of pairs whose motion is unsupported.
+    """
+    batch = q.shape[:-1]
+    T, Jb, bad = {}, {}, {}
+    for k, p in enumerate(mech.pairs):
+        if needed is not None and k not in needed:
+            continue
+        try:
+            T[k], Jb[k] = _pair_kinematics(p, q[..., slices[p.name]])
+        except (UnsupportedPairError, ValueError, TypeError) as err:
+            # no motion for this pair type, or parameters its motion refuses (e.g. a skew angle
+            # against WR1): the pair cannot take part in the rank analysis
+            bad[k] = str(err)
+    eye = np.broadcast_to(np.eye(4), batch + (4, 4))
+    X = {r: eye for r in roots}
+    for k, u, v, fwd in tree_idx:
+        if k not in T or X.get(u) is None:
+            X[v] = None
+            continue
+        X[v] = X[u] @ (T[k] if fwd else inverse(T[k]))
+    S = {}
+    for k in T:
+        p = mech.pairs[k]
+        X2 = X.get(p.link2)
+        if X2 is not None:
+            S[k] = adjoint(X2 @ p.P2) @ Jb[k]
+    return T, S, X, bad
+
+
+def _loop_parts(mech, loop, T, S, X, n, batch, slices):
+    """(T_loop, G, J_base) of one loop: G maps root coordinates into the walk from link a."""
+    pairs = mech.pairs
+    c = loop[0][0]
+    a, b = pairs[c].link1, pairs[c].link2
+    G = T[c] @ inverse(X[b])
+    T_loop = G @ X[a]
+    J = np.zeros(batch + (6, n))
+    for k, fwd in loop:
+        sl = slices[pairs[k].name]
+        if fwd:
+            J[..., :, sl] += S[k]
+        else:
+            J[..., :, sl] -= S[k]
+    return T_loop, G, J
+
+
+def _residual_and_jacobian(T_loop, J_a):
+    p = T_loop[..., :3, 3]
+    phi = rotation_vector(T_loop[..., :3, :3])
+    r = np.concatenate([p, phi], axis=-1)
+    Jv = J_a[..., :3, :] - _hat3(p) @ J_a[..., 3:, :]
+    Jw = _left_jacobian_inverse(phi) @ J_a[..., 3:, :]
+    return r, np.concatenate([Jv, Jw], axis=-2)
+
+
+def loop_closure(mech, structure: Structure, q):
+    """Loop-closure residual and its Jacobian for pair values ``q`` (..., n).
+
+    Returns ``(r, J)``: ``r`` (..., 6 L) stacks ``(p, phi)`` per loop in
+    ``structure.loops`` order (see the module docstring: translation of the
+    loop placement in metres, rotation vector in radians, both in the frame
+    of the loop's first link); ``J`` (..., 6 L, n) is ``dr/dq`` with columns
+    in :attr:`Mechanism.value_slices` order. Leading axes of ``q`` are batch
+    axes. Raises :class:`UnsupportedPairError` when a pair of a loop has no
+    motion defined.
+    """
+    q = np.asarray(q, dtype=np.float64)
+    n = mech.value_count
+    if q.ndim < 1 or q.shape[-1] != n:
+        raise ValueError(f"q must have shape (..., {n}) (the flat pair-value vector), got {q.shape}")
+    batch = q.shape[:-1]
+    L = len(structure.loops)
+    if L == 0:
+        return np.zeros(batch + (0,)), np.zeros(batch + (0, n))
+    idx = structure._pair_index
+    loops = [[(idx[name], fwd) for name, fwd in lp] for lp in structure.loops]
+    slices = mech.value_slices
+    T, S, X, bad = _kinematics(mech, structure._tree_idx, structure._roots, q, slices)
+    needed = {k for lp in loops for k, _ in lp}
+    missing = sorted(set(bad) & needed)
+    if missing:
+        why = "; ".join(f"{mech.pairs[k].name!r}: {bad[k]}" for k in missing)
+        raise UnsupportedPairError(f"loop closure needs the motion of pair(s) without one here ({why})")
+    rs, Js = [], []
+    for lp in loops:
+        T_loop, G, J = _loop_parts(mech, lp, T, S, X, n, batch, slices)
+        r, Jr = _residual_and_jacobian(T_loop, adjoint(G) @ J)
+        rs.append(r)
+        Js.append(Jr)
+    return np.concatenate(rs, axis=-1), np.concatenate(Js, axis=-2)
+
+
+# --------------------------------------------------------------------------- analysis
+
+def analyse(mech, *, tol: float | None = None) -> Structure:
+    """Graph, loops and mobility of ``mech`` at its initial state (see the module docstring).
+
+    ``tol``: relative rank tolerance (dimensionless, default :data:`DEFAULT_TOL`).
+    """
+    tol = DEFAULT_TOL if tol is None else float(tol)
+    if not (tol > 0.0 and np.isfinite(tol)):
+        raise ValueError(f"tol must be a positive number, got {tol!r}")
+    pairs = mech.pairs
+    names = [p.name for p in pairs]
+    order, tree_idx, roots, comps, chords, loops = _topology(mech)
+    link_comp = {ln: ci for ci, comp in enumerate(comps) for ln in comp}
+    n = mech.value_count
+    slices = mech.value_slices
+    size = float(mech.size())
+    notes = []
+
+    q0 = mech.initial_vector()
+    T, S, X, bad = _kinematics(mech, tree_idx, roots, q0, slices)
+    for k in sorted(bad):
+        notes.append(f"pair {names[k]!r} ({pairs[k].kind}): no motion available ({bad[k]}), "
+                     "so the rank mobility of its component is not computed")
+    # Length scale for the dimensionless Jacobian: the model size, or the pair frames'
+    # distance from their component's root when that is larger.
+    for k, p in enumerate(pairs):
+        X2 = X.get(p.link2)
+        if X2 is not None:
+            size = max(size, float(np.linalg.norm((X2 @ p.P2)[:3, 3])))
+    lengths = length_columns(mech)
+    col_scale = np.where(lengths, size, 1.0)
+
+    loop_comp = [link_comp[pairs[lp[0][0]].link1] for lp in loops]
+    components, worst_closure = [], 0.0
+    for ci, comp in enumerate(comps):
+        comp_set = set(comp)
+        cpairs = [k for k, p in enumerate(pairs) if p.link1 in comp_set]
+        cloops = [li for li, c in enumerate(loop_comp) if c == ci]
+        floating = comp[0] != mech.base
+        dof = sum(pairs[k].value_count for k in cpairs)
+        n_links, n_joints = len(comp), len(cpairs)
+        gruebler = 6 * (n_links - (0 if floating else 1) - n_joints) + dof
+        c = Component(links=list(comp), root=comp[0], pairs=[names[k] for k in cpairs],
+                      loops=cloops, floating=floating, dof=dof, mobility_gruebler=gruebler)
+        if not cloops:
+            c.rank, c.redundant_constraints = 0, 0
+            c.mobility = dof + (6 if floating else 0)
+        elif not (set(cpairs) & set(bad)):
+            _rank_analysis(mech, c, [loops[li] for li in cloops], cpairs, T, S, X, n, slices,
+                           size, col_scale, tol)
+            worst_closure = max(worst_closure, c.closure_residual)
+        components.append(c)
+
+    def total(attr):
+        vals = [getattr(c, attr) for c in components]
+        return None if any(v is None for v in vals) else int(sum(vals))
+
+    mobility = total("mobility")
+    redundant = total("redundant_constraints")
+    rank = total("rank")
+    rtol_used = max([tol] + [_rank_rtol(tol, c.closure_residual) for c in components if c.loops])
+    if worst_closure > 1e-6:
+        notes.append(f"the initial state does not close the loops (largest residual {worst_closure:.3g} "
+                     "relative to the model size): mobility by rank is taken at a state that is not assembled")
+    redundant_joints = sorted({j for c in components for j in c.redundant_joints},
+                              key=names.index)
+    return Structure(
+        mechanism=mech.name, base=mech.base, order=order,
+        tree=[(names[k], u, v, fwd) for k, u, v, fwd in tree_idx],
+        chords=[names[k] for k in chords],
+        loops=[[(names[k], fwd) for k, fwd in lp] for lp in loops],
+        kind="network" if loops else "tree", components=components, dof=n,
+        mobility_gruebler=int(sum(c.mobility_gruebler for c in components)),
+        mobility=mobility, redundant_constraints=redundant, redundant_joints=redundant_joints,
+        rank=rank, tol=rtol_used, closure_residual=worst_closure, size=size, notes=notes,
+        _pair_index={nm: k for k, nm in enumerate(names)}, _tree_idx=tree_idx, _roots=roots)
+
+
+def _rank_rtol(tol, closure):
+    # A state closed only to `closure` cannot resolve singular values finer than about that; past
+    # 1e-4 the state is not assembled at all (a note says so) and the generic rank is the best guess.
+    return max(tol, min(100.0 * closure, 1e-4))
+
+
+def _rank_analysis(mech, comp: Component, loops, cpairs, T, S, X, n, slices, size, col_scale, tol):
+    """Rank, mobility, redundant constraints and the joints carrying them, for one component."""
+    pairs = mech.pairs
+    blocks, closure = [], 0.0
+    for lp in loops:
+        T_loop, G, J = _loop_parts(mech, lp, T, S, X, n, (), slices)
+        blocks.append(J)
+        p = T_loop[:3, 3]
+        phi = rotation_vector(T_loop[:3, :3])
+        closure = max(closure, float(np.linalg.norm(p)) / size, float(np.linalg.norm(phi)))
+    cols = np.concatenate([np.arange(n)[slices[pairs[k].name]] for k in cpairs]) if cpairs else \
+        np.zeros(0, dtype=int)
+    J = np.concatenate(blocks, axis=0)[:, cols]
+    row_scale = np.tile(np.r_[np.full(3, 1.0 / size), np.ones(3)], len(loops))
+    Jn = row_scale[:, None] * J * col_scale[cols][None, :]
+    # U must span the whole row space (the left null space is wanted); V is not needed in full.
+    U, s, _ = np.linalg.svd(Jn, full_matrices=Jn.shape[0] > Jn.shape[1])
+    rtol = _rank_rtol(tol, closure)
+    rank = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0.0 else 0
+    comp.rank = rank
+    comp.singular_values = [float(x) for x in s]
+    comp.closure_residual = closure
+    comp.mobility = comp.dof - rank + (6 if comp.floating else 0)
+    comp.redundant_constraints = 6 * len(loops) - rank
+    if comp.redundant_constraints:
+        N = U[:, rank:].reshape(len(loops), 6, -1)      # self-stresses (left null space), per loop
+        pos = {k: i for i, k in enumerate(cpairs)}
+        sign = np.zeros((len(loops), len(cpairs)))       # loop-joint incidence, signed by direction
+        for li, lp in enumerate(loops):
+            for k, fwd in lp:
+                sign[li, pos[k]] = 1.0 if fwd else -1.0
+        W = np.einsum("lj,lrk->jrk", sign, N)             # wrench each joint carries, per self-stress
+        in_loop = np.any(sign != 0.0, axis=0)
+        heavy = np.max(np.abs(W), axis=(1, 2)) > _CARRY_TOL
+        comp.redundant_joints = [pairs[k].name for i, k in enumerate(cpairs) if in_loop[i] and heavy[i]]
+
+
+# --------------------------------------------------------------------------- output documents
+
+GRAPH_FORMAT = "p105-graph/1"
+
+
+def _loop_links(mech, loop):
+    first = mech.pair(loop[0][0])
+    at, out = first.link1, []
+    for name, fwd in loop:
+        out.append(at)
+        p = mech.pair(name)
+        at = p.link2 if fwd else p.link1
+    return out
+
+
+def structure_document(mech, st: Structure) -> dict:
+    """The JSON-ready description of a :class:`Structure` (format ``p105-graph/1``).
+
+    Keys: ``links``, ``joints``, ``tree``, ``loops``, ``components``, ``kind``,
+    ``freedoms``, ``mobility``, ``mobility_gruebler``, ``rank``,
+    ``redundant_constraints``, ``redundant_joints``, ``closure_residual``,
+    ``tolerance``, ``size`` (metres), ``notes``.
+    """
+    comp_of = {ln: ci for ci, c in enumerate(st.components) for ln in c.links}
+    parent = {child: (name, par) for name, par, child, _ in st.tree}
+    depth = {}
+    for ln in st.order:
+        depth[ln] = depth[parent[ln][1]] + 1 if ln in parent else 0
+    tree_pairs = {name for name, *_ in st.tree}
+    loops_of = {}
+    for li, lp in enumerate(st.loops):
+        for name, _ in lp:
+            loops_of.setdefault(name, []).append(li)
+    redundant = set(st.redundant_joints)
+    links = []
+    for ln in st.order:
+        link = mech.link(ln)
+        links.append({"name": ln, "id": link.id, "base": ln == mech.base, "component": comp_of[ln],
+                      "depth": depth[ln], "parent": parent[ln][1] if ln in parent else None,
+                      "parent_joint": parent[ln][0] if ln in parent else None})
+    joints = []
+    for p in mech.pairs:
+        joints.append({"name": p.name, "id": p.ids.get("pair"), "joint_id": p.ids.get("joint"),
+                       "kind": p.kind, "link1": p.link1, "link2": p.link2, "freedoms": p.value_count,
+                       "actuated": bool(p.actuated), "tree": p.name in tree_pairs,
+                       "loops": loops_of.get(p.name, []), "redundant": p.name in redundant})
+    loops = [{"chord": st.chords[li], "links": _loop_links(mech, lp),
+              "joints": [{"joint": name, "forward": fwd} for name, fwd in lp]}
+             for li, lp in enumerate(st.loops)]
+    comps = [{"root": c.root, "floating": c.floating, "links": c.links, "joints": c.pairs, "loops": c.loops,
+              "freedoms": c.dof, "mobility": c.mobility, "mobility_gruebler": c.mobility_gruebler,
+              "rank": c.rank, "redundant_constraints": c.redundant_constraints,
+              "redundant_joints": c.redundant_joints} for c in st.components]
+    return {"format": GRAPH_FORMAT, "mechanism": mech.name, "base": mech.base, "kind": st.kind,
+            "links": links, "joints": joints,
+            "tree": [{"joint": n, "parent": a, "child": b, "forward": f} for n, a, b, f in st.tree],
+            "loops": loops, "components": comps, "freedoms": st.dof,
+            "mobility": st.mobility, "mobility_gruebler": st.mobility_gruebler, "rank": st.rank,
+            "redundant_constraints": st.redundant_constraints, "redundant_joints": st.redundant_joints,
+            "closure_residual": st.closure_residual, "tolerance": st.tol, "size": st.size,
+            "notes": list(st.notes)}
+
+
+def _summary(st: Structure) -> str:
+    mob = "unknown" if st.mobility is None else str(st.mobility)
+    red = "unknown" if st.redundant_constraints is None else str(st.redundant_constraints)
+    return (f"{st.kind}, {len(st.loops)} loop(s), mobility {mob} (Gruebler {st.mobility_gruebler}, "
+            f"{red} redundant constraint(s))")
+
+
+def _dot_id(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def to_dot(mech, st: Structure) -> str:
+    """Graphviz DOT: links as nodes (base doubled), joints as edges first -> second link;
+    spanning-tree edges solid, chords dashed, joints carrying redundant constraints red."""
+    tree = {name for name, *_ in st.tree}
+    red = set(st.redundant_joints)
+    out = [f"digraph {_dot_id(mech.name)} {{",
+           f"  label={_dot_id(mech.name + ': ' + _summary(st))};",
+           "  node [shape=box];"]
+    for ln in st.order:
+        attrs = ', peripheries=2' if ln == mech.base else ""
+        out.append(f"  {_dot_id(ln)} [label={_dot_id(ln)}{attrs}];")
+    for p in mech.pairs:
+        style = "solid" if p.name in tree else "dashed"
+        color = ', color="red"' if p.name in red else ""
+        out.append(f"  {_dot_id(p.link1)} -> {_dot_id(p.link2)} "
+                   f"[label={_dot_id(p.name + chr(10) + p.kind)}, style={style}{color}];")
+    out.append("}")
+    return "\n".join(out) + "\n"
+
+
+def to_graphml(mech, st: Structure) -> str:
+    """GraphML: nodes = links (data: name, base, component), edges = joints (data: name, kind,
+    freedoms, tree, loops, redundant); graph data: mobility, mobility_gruebler, redundant."""
+    from xml.sax.saxutils import escape
+
+    tree = {name for name, *_ in st.tree}
+    red = set(st.redundant_joints)
+    comp_of = {ln: ci for ci, c in enumerate(st.components) for ln in c.links}
+    loops_of = {}
+    for li, lp in enumerate(st.loops):
+        for name, _ in lp:
+            loops_of.setdefault(name, []).append(str(li))
+    node_id = {ln: f"n{i}" for i, ln in enumerate(st.order)}
+    keys = [("g_mechanism", "graph", "mechanism", "string"), ("g_kind", "graph", "kind", "string"),
+            ("g_mobility", "graph", "mobility", "int"), ("g_gruebler", "graph", "mobility_gruebler", "int"),
+            ("g_redundant", "graph", "redundant_constraints", "int"),
+            ("n_name", "node", "name", "string"), ("n_base", "node", "base", "boolean"),
+            ("n_component", "node", "component", "int"),
+            ("e_name", "edge", "name", "string"), ("e_kind", "edge", "kind", "string"),
+            ("e_freedoms", "edge", "freedoms", "int"), ("e_tree", "edge", "tree", "boolean"),
+            ("e_loops", "edge", "loops", "string"), ("e_redundant", "edge", "redundant", "boolean")]
+    out = ['<?xml version="1.0" encoding="UTF-8"?>',
+           '<graphml xmlns="http://graphml.graphdrawing.org/xmlns" '
+           'xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
+           'xsi:schemaLocation="http://graphml.graphdrawing.org/xmlns '
+           'http://graphml.graphdrawing.org/xmlns/1.0/graphml.xsd">']
+    for kid, dom, name, typ in keys:
+        out.append(f'  <key id="{kid}" for="{dom}" attr.name="{name}" attr.type="{typ}"/>')
+    out.append('  <graph id="G" edgedefault="directed">')
+
+    def data(key, value):
+        if value is None:
+            return ""
+        if isinstance(value, bool):
+            value = "true" if value else "false"
+        return f'<data key="{key}">{escape(str(value))}</data>'
+
+    out.append("    " + "".join([data("g_mechanism", mech.name), data("g_kind", st.kind),
+                                 data("g_mobility", st.mobility), data("g_gruebler", st.mobility_gruebler),
+                                 data("g_redundant", st.redundant_constraints)]))
+    for ln in st.order:
+        out.append(f'    <node id="{node_id[ln]}">' + data("n_name", ln) + data("n_base", ln == mech.base)
+                   + data("n_component", comp_of[ln]) + "</node>")
+    for k, p in enumerate(mech.pairs):
+        out.append(f'    <edge id="e{k}" source="{node_id[p.link1]}" target="{node_id[p.link2]}">'
+                   + data("e_name", p.name) + data("e_kind", p.kind) + data("e_freedoms", p.value_count)
+                   + data("e_tree", p.name in tree) + data("e_loops", " ".join(loops_of.get(p.name, [])))
+                   + data("e_redundant", p.name in red) + "</edge>")
+    out.append("  </graph>")
+    out.append("</graphml>")
+    return "\n".join(out) + "\n"
+
+
+def _mermaid_text(s: str) -> str:
+    return s.replace("&", "#amp;").replace('"', "#quot;").replace("<", "#lt;").replace(">", "#gt;")
+
+
+def to_mermaid(mech, st: Structure) -> str:
+    """Mermaid flowchart: links as nodes (the base as a stadium), joints as edges first -> second
+    link, spanning-tree edges solid, chords dotted."""
+    tree = {name for name, *_ in st.tree}
+    node_id = {ln: f"n{i}" for i, ln in enumerate(st.order)}
+    out = ["flowchart LR", f"  %% {_mermaid_text(mech.name)}: {_mermaid_text(_summary(st))}"]
+    for ln in st.order:
+        label = _mermaid_text(ln + (" (base)" if ln == mech.base else ""))
+        out.append(f'  {node_id[ln]}(["{label}"])' if ln == mech.base else f'  {node_id[ln]}["{label}"]')
+    for p in mech.pairs:
+        label = _mermaid_text(f"{p.name}: {p.kind}")
+        a, b = node_id[p.link1], node_id[p.link2]
+        if p.name in tree:
+            out.append(f'  {a} -- "{label}" --> {b}')
+        else:
+            out.append(f'  {a} -. "{label}" .-> {b}')
+    return "\n".join(out) + "\n"
