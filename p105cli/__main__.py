@@ -1,5 +1,3 @@
-import sys
+from p105cli.cli import run
 
-from p105cli.cli import main
-
-sys.exit(main())
+run()

@@ -2,14 +2,7 @@
 
 from __future__ import annotations
 
-import os
-
 import click
-
-# The matrices here are small (6 x loops by the pair freedoms): OpenBLAS threads only cost, and on a
-# busy machine they made one 120 x 300 SVD 100 times slower. numpy is not imported yet when this
-# module loads (the group imports it lazily), so this takes effect; a user's setting wins.
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, load_document, open_output
 from .options import input_argument, output_option
