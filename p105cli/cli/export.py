@@ -4,29 +4,71 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, load_document, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, InputError, diag, load_document, open_output, report_warnings
 from .options import input_argument, output_option, stream_option
 from ._emit import emit_json, emit_p21
+
+
+def _convert(doc, schema: str, occt_compat: bool):
+    """The document converted to ``schema`` (p105cli.kinematics.writer); diagnostics on stderr."""
+    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.kinematics.writer import write_mechanism
+
+    mechanisms = read_mechanisms(doc)
+    if len(mechanisms) != 1:
+        what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
+        raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
+    out, diagnostics = write_mechanism(mechanisms[0], schema, source=doc, occt_compat=occt_compat)
+    for message in diagnostics:
+        diag("warning", f"{doc.source}: {message}")
+    return out
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
 @click.option("--to", "to", type=click.Choice(["p21", "json"]), default="p21", show_default=True,
               help="Output format: Part 21 text, or the p105/1 JSON model.")
+@click.option("--schema", type=click.Choice(["ap214", "p105", "ap242"]), default=None,
+              help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
+                   "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "
+                   "What the target cannot express is reported on stderr.")
+@click.option("--occt-compat", is_flag=True,
+              help="With --schema ap242: write what Open CASCADE misreads explicitly (pair freedom "
+                   "flags, pair names, state contexts) instead of the standard '*', and leave out "
+                   "what it does not read (actuation, loops, configuration sequences).")
 @input_argument
 @output_option
 @stream_option
-def export(to, input, output, stream):
+def export(to, schema, occt_compat, input, output, stream):
     """Write a model (Part 21 or p105/1 JSON, sniffed) as Part 21 or JSON.
 
     Part 21 output is canonical: one instance per line, shortest exact
     reals, header as read. The same model always gives the same bytes.
+    With --schema the mechanism is converted between the Part 105:1996
+    layout (ap214; p105 allows su_parameters) and the AP242 layout;
+    everything else in the file is kept, and whatever the target cannot
+    express is reported on stderr with its #id.
+
+    --occt-compat (AP242 only): Open CASCADE's reader misreads the
+    standard '*' of derived attributes (it takes the freedom flags of a
+    revolute pair as all TRUE) and does not know actuated pairs, loops or
+    configuration sequences; this writes the flags, pair names and state
+    contexts explicitly, orientations as rotation_about_direction, and
+    leaves actuation, loops and sequences out (each reported), so the file
+    loads there with an empty check list. Without it the output is the
+    standard form, which p105 validate passes.
     """
     if stream and to != "json":
         raise click.UsageError("--stream applies to --to json only")
+    if occt_compat and schema != "ap242":
+        raise click.UsageError("--occt-compat applies to --schema ap242 only")
     doc = load_document(input)
+    if schema is not None:
+        report_warnings(doc)
+        doc = _convert(doc, schema, occt_compat)
     with open_output(output, (input,)) as out:
         if to == "p21":
             emit_p21(doc, out)
         else:
             emit_json(doc, out, stream)
-    report_warnings(doc)
+    if schema is None:
+        report_warnings(doc)

@@ -168,7 +168,8 @@ class Builder:
         return self.add("circle", name, self.axis2(T), real(radius))
 
     # ------------------------------------------------------------ units and contexts
-    def units(self, *, cbu_dimensions_explicit: bool) -> dict:
+    def units(self, *, cbu_dimensions_explicit: bool, length_prefix: str | None = "milli",
+              angle: str = "degree", uncertainty: float = 1e-7, degree_factor: float = DEGREE_FACTOR) -> dict:
         """Millimetre, radian, degree (conversion-based), steradian and the length
         uncertainty, written once per file; returns a dict of references.
 
@@ -176,23 +177,36 @@ class Builder:
         ``DIMENSIONAL_EXPONENTS`` instance (AP242, and what CAD systems write)
         or ``*`` where the schema derives it (the AP214 ed3 long form re-declares
         it as DERIVE in ``conversion_based_unit``).
+
+        ``length_prefix`` (an SI prefix such as ``"milli"``, or None for the
+        metre), ``angle`` (``"degree"`` or ``"radian"``), ``uncertainty``
+        (in that length unit) and ``degree_factor`` (radians per degree as
+        written) choose other global units (the model writer);
+        the defaults are the corpus's. The keys of the returned dict stay
+        ``mm`` (the length unit) and ``deg`` (the plane-angle unit in use).
         """
         if self._units is not None:
             raise RuntimeError("Builder.units: the units are already written")
+        prefix = enum(length_prefix) if length_prefix else None
         mm = self.add_complex([("length_unit", []), ("named_unit", [DERIVED]),
-                               ("si_unit", [enum("milli"), enum("metre")])])
+                               ("si_unit", [prefix, enum("metre")])])
         rad = self.add_complex([("named_unit", [DERIVED]), ("plane_angle_unit", []),
                                 ("si_unit", [None, enum("radian")])])
-        factor = self.add("plane_angle_measure_with_unit", typed("plane_angle_measure", DEGREE_FACTOR), rad)
-        if cbu_dimensions_explicit:
-            dims = self.add("dimensional_exponents", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        if angle == "degree":
+            factor = self.add("plane_angle_measure_with_unit", typed("plane_angle_measure", degree_factor), rad)
+            if cbu_dimensions_explicit:
+                dims = self.add("dimensional_exponents", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            else:
+                dims = DERIVED
+            deg = self.add_complex([("conversion_based_unit", ["DEGREE", factor]), ("named_unit", [dims]),
+                                    ("plane_angle_unit", [])])
+        elif angle == "radian":
+            deg = rad
         else:
-            dims = DERIVED
-        deg = self.add_complex([("conversion_based_unit", ["DEGREE", factor]), ("named_unit", [dims]),
-                                ("plane_angle_unit", [])])
+            raise ValueError(f"Builder.units: plane-angle unit {angle!r} (degree or radian)")
         sr = self.add_complex([("named_unit", [DERIVED]), ("si_unit", [None, enum("steradian")]),
                                ("solid_angle_unit", [])])
-        unc = self.add("uncertainty_measure_with_unit", typed("length_measure", 1e-7), mm,
+        unc = self.add("uncertainty_measure_with_unit", typed("length_measure", uncertainty), mm,
                        "distance_accuracy_value", "confusion accuracy")
         self._units = {"mm": mm, "rad": rad, "deg": deg, "sr": sr, "uncertainty": unc}
         return self._units
