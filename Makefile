@@ -57,5 +57,15 @@ bench-parse: $(STAMP)
 bench-validate: $(STAMP)
 	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-validate.md
 
+# Cable statics: patent vs rod vs scipy solve_bvp vs PyElastica (installed for this target only).
+bench-cable: $(STAMP)
+	$(PY) -m pip install --quiet matplotlib pyelastica
+	$(PY) bench/bench_cable.py --markdown docs/benchmarks-cable.md --plot docs/cable-accuracy-vs-time.png
+
+# Position analysis: p105 vs roboticstoolbox and Pinocchio (installed for this target only).
+bench-solve: $(STAMP)
+	$(PY) -m pip install --quiet roboticstoolbox-python pin
+	$(PY) bench/bench_solve.py --markdown docs/benchmarks-solve.md
+
 clean:
 	rm -rf build .pytest_cache .hypothesis

@@ -98,6 +98,46 @@ PAGES: dict[str, dict] = {
              ["p105 parse arm.stp | p105 export --to p21 > arm2.stp"]),
         ],
     },
+    "convert-dh-su": {
+        "operands": {
+            "input": "A DH table (CSV with the header name,type,a,alpha,d,theta,offset and optional "
+                     "lower,upper; or JSON with \"joints\"), or with `--to dh` / `--to dh-json` a "
+                     "model (Part 21 or p105/1 JSON). Sniffed from the content; `-` or no operand "
+                     "reads standard input.",
+        },
+        "stdin": [
+            "CSV: one joint per line, base to tip; type R (revolute) or P (prismatic); lengths "
+            "in metres, angles in radians unless `--deg`; numbers may be written pi, k*pi, "
+            "pi/m, k*pi/m; blank lines and lines starting with # are skipped. The joint "
+            "variable q replaces theta of a revolute joint and d of a prismatic one "
+            "(theta = q + offset, d = q + offset), so that field must be empty or 0.",
+            "JSON: {\"convention\", \"joints\": [{\"name\", \"type\", \"a\", \"alpha\", \"d\", "
+            "\"theta\", \"offset\"}], \"base\": 4x4, \"tool\": 4x4, \"angle_unit\"}; the end pose "
+            "is base . A_1(q_1) ... A_n(q_n) . tool.",
+        ],
+        "stdout": [
+            "A complete mechanism (Part 21, or the p105/1 JSON model with `--to json`): links "
+            "link0 (the base) to linkN whose frames are the DH frames, one revolute or prismatic "
+            "pair per joint named after it, pair frames by ISO 10303-105 Annex F (su_parameters "
+            "in the ap242 and p105 profiles, the equivalent axis2_placement_3d in ap214), the "
+            "base transform as the base placement, the tool as the frame \"tool\" of linkN, and "
+            "the initial state q = 0. A p105-profile file is checked with "
+            "`p105 validate --schema p105`.",
+            "With `--to dh`, the DH table of the model as CSV (base and tool are not part of CSV: "
+            "a warning says when they are lost); with `--to dh-json`, as JSON with base and tool. "
+            "A model whose pairs are not one serial chain of revolute and prismatic pairs with DH "
+            "placements exits 1 naming the first pair that is not a DH row.",
+        ],
+        "examples": [
+            ("Convert a standard DH table to an AP242 file and check it:",
+             ["p105 convert-dh-su --convention standard puma560_dh.csv -o puma560.stp",
+              "p105 validate puma560.stp"]),
+            ("A modified-DH table in degrees, written in the 1996 layout with su_parameters:",
+             ["p105 convert-dh-su --convention modified --deg --schema p105 arm.csv > arm.stp"]),
+            ("Read the DH table back from a model (exit 1 names a pair that is not a DH row):",
+             ["p105 convert-dh-su --convention standard --to dh puma560.stp"]),
+        ],
+    },
     "export": {
         "operands": {
             "input": "The model to write out: a p105/1 JSON model (a document or JSON Lines) or "
@@ -112,10 +152,22 @@ PAGES: dict[str, dict] = {
             "With `--to p21` (the default), a canonical Part 21 file: one instance per line, "
             "shortest exact reals, header as read; the same model always gives the same bytes. "
             "With `--to json`, the p105/1 JSON model, or JSON Lines with `--stream`.",
+            "With `--schema`, the same file converted to that profile's layout: every instance "
+            "outside the kinematics keeps its id, the kinematic instances are rewritten (ids kept "
+            "where the role is the same, new ones above the file's largest), FILE_SCHEMA is the "
+            "target's. Configuration sequences are converted; what the target cannot express "
+            "(a base placement in AP242, loops or paths across layouts, ...) is a warning on "
+            "standard error naming its #id. See docs/conversion.md.",
         ],
         "examples": [
             ("Turn the JSON model back into a Part 21 file:",
              ["p105 parse arm.stp | p105 export --to p21 > arm2.stp"]),
+            ("Convert a Part 105:1996 (AP214) file to the AP242 layout, and back:",
+             ["p105 export --schema ap242 old.stp -o new.stp",
+              "p105 export --schema ap214 new.stp -o old-again.stp"]),
+            ("Write AP242 that Open CASCADE reads with an empty check list (explicit "
+             "freedom flags and names instead of the standard '*'; actuation left out):",
+             ["p105 export --schema ap242 --occt-compat old.stp -o for-occt.stp"]),
             ("Write the JSON model to a file, atomically:",
              ["p105 export --to json arm.stp -o arm.json"]),
             ("Canonicalize a Part 21 file (stable bytes for diffs and caches):",
@@ -162,6 +214,101 @@ PAGES: dict[str, dict] = {
              ["p105 validate --select 'SCH-kinematic_joint.*' --fail-on warning arm.stp"]),
             ("List every rule with its EXPRESS source:",
              ["p105 validate --list-rules --schema ap214"]),
+        ],
+    },
+    "graph": {
+        "operands": {
+            "input": "The model to analyse: a Part 21 file or a p105/1 JSON model (sniffed). `-` "
+                     "or no operand reads standard input.",
+        },
+        "stdin": [
+            "A Part 21 file or p105/1 JSON model holding one mechanism (or several, one of "
+            "them chosen with `--mechanism`), in the 1996 (AP214) or the AP242 layout.",
+        ],
+        "stdout": [
+            "The structure of the mechanism: links as vertices, joints as edges, the spanning "
+            "tree from the base link, one independent loop per joint outside the tree (its "
+            "joints in traversal order), tree or network, the mobility by Gruebler-Kutzbach "
+            "and by the rank of the loop-closure Jacobian at the initial state, the redundant "
+            "constraints and the joints that carry them. As JSON (`p105-graph/1`, the "
+            "default), Graphviz DOT, GraphML or a Mermaid flowchart.",
+            "With `--enrich`, the model itself (Part 21 for Part 21 input, else JSON; `--to` "
+            "chooses) with a kinematic_topology_tree_structure and, for a network, a "
+            "kinematic_topology_network_structure of kinematic_loops added (AP242 layout; "
+            "new instance ids above the largest).",
+        ],
+        "examples": [
+            ("Mobility of a linkage (jq picks the numbers):",
+             ["p105 graph four_bar.stp | jq '{mobility, mobility_gruebler, redundant_constraints}'"]),
+            ("Draw the link-joint graph with Graphviz (chords dashed, over-constrained joints red):",
+             ["p105 graph --to dot four_bar.stp | dot -Tsvg > four_bar.svg"]),
+            ("Add the Part 105 tree and loop entities and check the result:",
+             ["p105 graph --enrich four_bar.stp | p105 validate"]),
+        ],
+    },
+    "interpolate": {
+        "operands": {
+            "input": "The model whose paths and configuration sequences are sampled: Part 21 or "
+                     "a p105/1 JSON model (sniffed). `-` or no operand reads standard input.",
+        },
+        "stdin": [
+            "A Part 21 file or p105/1 JSON model with kinematic paths (AP242 "
+            "kinematic_path_defined_by_nodes) or configuration interpolation sequences (both "
+            "layouts), for example the output of `p105 solve`.",
+        ],
+        "stdout": [
+            "JSON Lines (default): one `frame` record per path sample with the 4x4 placement "
+            "(metres) of the link frame following the path, one `configuration` record per "
+            "sequence sample with every pair's values (SI units, radians), then one `summary` "
+            "record. With `--to csv`, a table of the frames (m00..m23) or of the pair values "
+            "(`name[i]` columns for multi-valued pairs).",
+            "Rotations are slerped on unit quaternions, never interpolated as angles; samples "
+            "of point-to-point segments and synchronous sequences carry `\"prescribed\": false` "
+            "because the standard leaves their law to the reader.",
+        ],
+        "examples": [
+            ("Sample the prescribed path of a four-bar every 0.01 with quaternions:",
+             ["p105 interpolate --what paths --step 0.01 --quaternion wxyz four_bar.stp"]),
+            ("The configuration sequence as a CSV table of pair values at 101 points:",
+             ["p105 interpolate --what configurations --count 101 --to csv four_bar.stp > motion.csv"]),
+            ("Only the nodes of one named path, with ypr angles (Annex E):",
+             ["p105 interpolate --path 'coupler point P path' --ypr four_bar.stp"]),
+        ],
+    },
+    "solve": {
+        "operands": {
+            "model": "The mechanism: a Part 21 file or a p105/1 JSON model (sniffed). `-` or no "
+                     "operand reads standard input; with `--scene` and a scene that stands alone "
+                     "it may be left out.",
+        },
+        "stdin": [
+            "The model, or the driven values (`--values -`) or the target poses (`--path -`); "
+            "only one of them can come from standard input. Driven values are CSV with a header of "
+            "pair names (`name[0]`, `name[1]`... for multi-valued pairs) and an optional `t` "
+            "column, or JSON Lines `{\"t\": t, \"pairs\": {name: value}}`; SI units and radians "
+            "unless `--length-unit` and `--angle-unit` say otherwise.",
+        ],
+        "stdout": [
+            "JSON Lines (`--to jsonl`): one `configuration` record per configuration with its "
+            "index, t, status (ok, out_of_range, singular, branch_change, not_converged, "
+            "not_assemblable), the values of every pair, the world placement of every link "
+            "(4x4, rows), the loop residual (or, for `--path`, the position and rotation error) "
+            "and the Newton iterations; then a `summary` record. `--to csv`: the same as a flat "
+            "table, link placements as `link.m00` ... `link.m23` columns.",
+            "The assembly branch is the initial state's and is tracked along the motion; a dead "
+            "centre, a branch change or a configuration that cannot be assembled is reported on "
+            "that configuration and on standard error, never passed over silently. The exit "
+            "status is 1 when any configuration is not ok.",
+        ],
+        "examples": [
+            ("Turn the crank of a four-bar through the angles of a CSV file (degrees):",
+             ["p105 solve four_bar.stp --values crank.csv --angle-unit deg --to jsonl"]),
+            ("A full turn in 361 steps as a table:",
+             ["p105 solve four_bar.stp --sweep A=0:6.283185307179586:361 --to csv > motion.csv"]),
+            ("Assemble the initial state (the actuated pairs at their initial values):",
+             ["p105 solve four_bar.stp --to jsonl"]),
+            ("Inverse analysis: the joint values that put link L6 on a path of poses:",
+             ["p105 solve puma560.stp --path tool_path.jsonl --target-link L6 --tol 1e-12 --to csv"]),
         ],
     },
 }

@@ -19,7 +19,19 @@ EXAMPLE = EXAMPLES / "four_bar_ap242.stp"
 # Arguments that make each subcommand do its main job on EXAMPLE.
 # validate --pass is a data filter too: the input on stdout when it passes; its report goes to -o.
 JOB = {"parse": ["parse"], "export": ["export", "--to", "p21"],
-       "validate": ["validate", "--pass", "-o", os.devnull]}
+       "validate": ["validate", "--pass", "-o", os.devnull],
+       "graph": ["graph", "--enrich"],
+       "interpolate": ["interpolate", "--what", "paths"],
+       "convert-dh-su": ["convert-dh-su", "--convention", "standard"],
+       "solve": ["solve", "--to", "jsonl"]}
+# Commands that read something other than a model: the input their JOB reads instead of
+# EXAMPLE, and a writer of a big one (tmp_path -> path) for the closed-pipe and Ctrl-C tests.
+INPUT = {"convert-dh-su": EXAMPLES / "puma560_dh.csv"}
+BIG_INPUT = {"convert-dh-su": lambda tmp_path: _big_dh_table(tmp_path)}
+# Long-running jobs with a large output, for the closed-pipe and Ctrl-C tests: by default a
+# command's JOB on a big point cloud; commands that need a mechanism get a big job on EXAMPLE.
+LONG_JOB = {"interpolate": ["interpolate", "--what", "paths", "--step", "1e-7"],
+            "solve": ["solve", "--sweep", "A=0:6.283185307179586:2000000", "--to", "jsonl"]}
 # Commands whose stdout is a model derived from the input (validate's analogues are in test_validate.py).
 MODEL_WRITERS = ["export", "parse"]
 
@@ -46,9 +58,10 @@ def test_subcommand_help_documents_exit_codes(name):
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_reads_file_and_stdin_the_same(name):
-    from_file = run_cli(*JOB[name], EXAMPLE)
-    from_stdin = run_cli(*JOB[name], input=EXAMPLE.read_bytes())
-    dash = run_cli(*JOB[name], "-", input=EXAMPLE.read_bytes())
+    example = INPUT.get(name, EXAMPLE)
+    from_file = run_cli(*JOB[name], example)
+    from_stdin = run_cli(*JOB[name], input=example.read_bytes())
+    dash = run_cli(*JOB[name], "-", input=example.read_bytes())
     assert from_file.returncode == 0, from_file.stderr
     assert from_file.stdout == from_stdin.stdout == dash.stdout
     assert from_file.stderr == b""
@@ -65,7 +78,8 @@ def test_sniffs_json_input_too(name):
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_deterministic_output(name):
-    assert run_cli(*JOB[name], EXAMPLE).stdout == run_cli(*JOB[name], EXAMPLE).stdout
+    example = INPUT.get(name, EXAMPLE)
+    assert run_cli(*JOB[name], example).stdout == run_cli(*JOB[name], example).stdout
 
 
 @pytest.mark.parametrize("name", COMMANDS)
@@ -113,17 +127,18 @@ def test_output_file_is_written_atomically(name, tmp_path):
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_output_into_a_missing_directory_is_exit_2(name, tmp_path):
-    r = run_cli(*JOB[name], EXAMPLE, "-o", tmp_path / "nope" / "out")
+    r = run_cli(*JOB[name], INPUT.get(name, EXAMPLE), "-o", tmp_path / "nope" / "out")
     assert r.returncode == ExitCode.USAGE and b"cannot write" in r.stderr
 
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_input_is_never_overwritten(name, tmp_path):
     src = tmp_path / "model.stp"
-    src.write_bytes(EXAMPLE.read_bytes())
+    example = INPUT.get(name, EXAMPLE)
+    src.write_bytes(example.read_bytes())
     r = run_cli(*JOB[name], src, "-o", src)
     assert r.returncode == ExitCode.USAGE and b"never overwrites its input" in r.stderr
-    assert src.read_bytes() == EXAMPLE.read_bytes()
+    assert src.read_bytes() == example.read_bytes()
 
 
 def _big_model(tmp_path, n=150_000):
@@ -133,10 +148,20 @@ def _big_model(tmp_path, n=150_000):
     return big
 
 
+def _big_dh_table(tmp_path, n=5000):
+    big = tmp_path / "big_dh.csv"
+    big.write_text("name,type,a,alpha,d,theta,offset\n"
+                   + "".join(f"J{i},{'RP'[i % 2]},0.1,pi/2,{'0.05,' if i % 2 == 0 else ',0.3'},0.1\n"
+                             for i in range(n)))
+    return big
+
+
 @pytest.mark.parametrize("name", COMMANDS)
 def test_closed_pipe_ends_quietly(name, tmp_path):
-    big = _big_model(tmp_path)
-    cmd = f"{sys.executable} -m p105cli {' '.join(JOB[name])} {big} | head -c 100 > /dev/null; " \
+    big = (BIG_INPUT[name](tmp_path) if name in BIG_INPUT else EXAMPLE if name in LONG_JOB
+           else _big_model(tmp_path))
+    cmd = f"{sys.executable} -m p105cli {' '.join(LONG_JOB.get(name, JOB[name]))} {big} " \
+          "| head -c 100 > /dev/null; " \
           f"echo ${{PIPESTATUS[0]}}"
     r = subprocess.run(["bash", "-c", cmd], capture_output=True, cwd=ROOT, timeout=120)
     assert r.stderr == b""
@@ -145,8 +170,10 @@ def test_closed_pipe_ends_quietly(name, tmp_path):
 
 @pytest.mark.parametrize("name", COMMANDS)
 def test_ctrl_c_is_exit_130_without_traceback(name, tmp_path):
-    big = _big_model(tmp_path, 400_000)
-    proc = subprocess.Popen([sys.executable, "-m", "p105cli", *JOB[name], big, "-o", tmp_path / "o"],
+    big = (BIG_INPUT[name](tmp_path) if name in BIG_INPUT else EXAMPLE if name in LONG_JOB
+           else _big_model(tmp_path, 400_000))
+    proc = subprocess.Popen([sys.executable, "-m", "p105cli", *LONG_JOB.get(name, JOB[name]), big,
+                             "-o", tmp_path / "o"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
     time.sleep(1.0)
     proc.send_signal(signal.SIGINT)
