@@ -23,7 +23,7 @@ JOB = {"parse": ["parse"], "export": ["export", "--to", "p21"],
        "graph": ["graph", "--enrich"],
        "interpolate": ["interpolate", "--what", "paths"],
        "convert-dh-su": ["convert-dh-su", "--convention", "standard"],
-       "solve": ["solve", "--to", "jsonl"]}
+       "solve": ["solve", "--to", "jsonl", "--no-timings"]}
 # Commands that read something other than a model: the input their JOB reads instead of
 # EXAMPLE, and a writer of a big one (tmp_path -> path) for the closed-pipe and Ctrl-C tests.
 INPUT = {"convert-dh-su": EXAMPLES / "puma560_dh.csv"}

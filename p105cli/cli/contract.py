@@ -65,7 +65,8 @@ class Settings:
     verbosity = 0  # -1 quiet, 0 normal, >=1 verbose
 
 
-def _stderr_is_terminal() -> bool:
+def stderr_is_terminal() -> bool:
+    """Progress and notes for a person: stderr is a terminal, and not in CI."""
     return sys.stderr.isatty() and not os.environ.get("CI")
 
 
@@ -73,7 +74,7 @@ def diag(level: str, message: str) -> None:
     """Write one diagnostic line to stderr (``level`` is error, warning or note)."""
     if level != "error" and Settings.verbosity < 0:
         return
-    if _stderr_is_terminal():
+    if stderr_is_terminal():
         from rich.console import Console
         style = {"error": "bold red", "warning": "yellow", "note": "cyan"}.get(level, "")
         Console(stderr=True, highlight=False).print(f"[{style}]{level}[/]: {message}", markup=True,
@@ -200,7 +201,7 @@ class Progress:
 
     def __init__(self, total: int, description: str):
         self._bar = None
-        if _stderr_is_terminal() and Settings.verbosity >= 0 and total > 50_000:
+        if stderr_is_terminal() and Settings.verbosity >= 0 and total > 50_000:
             from rich.console import Console
             from rich.progress import Progress as RichProgress
             self._bar = RichProgress(transient=True, console=Console(stderr=True))

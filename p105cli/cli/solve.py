@@ -14,7 +14,7 @@ import os
 import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, load_document, open_output, \
-    read_input_bytes, report_warnings
+    read_input_bytes, report_warnings, stderr_is_terminal
 from .options import output_option
 
 FORMATS = ["model", "jsonl", "csv"]
@@ -76,7 +76,9 @@ def _key_label(key) -> str:
               help="A scene (JSON or TOML) of effects to simulate on the solved motion (cables).")
 @click.option("--keypoints", metavar="FILE", default=None,
               help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
-@click.option("--timings", is_flag=True, help="Add the time per configuration to the summary (output varies).")
+@click.option("--timings/--no-timings", default=True, show_default=True,
+              help="Report the time per configuration in the jsonl summary (what the run cost); "
+                   "--no-timings gives byte-reproducible output.")
 @output_option
 def solve(model, values, sets, sweeps, path, target_link, target_frame, tol, max_iter, to, angle_unit, length_unit,
           mechanism_name, schema, scene, keypoints, timings, output):
@@ -242,6 +244,14 @@ class _Tally:
         return out
 
     def report(self):
+        if stderr_is_terminal() and self.n:
+            # what the run achieved and cost, for the person watching (csv and model output
+            # have no summary record)
+            worst = (f"max pose error {self.worst.get('position_error', 0.0):.3g} m / "
+                     f"{self.worst.get('rotation_error', 0.0):.3g} rad" if self.inverse
+                     else f"max residual {self.worst.get('residual', 0.0):.3g}")
+            diag("note", f"{self.n} configurations, {worst}, "
+                         f"{1e6 * self.seconds / self.n:.1f} us per configuration")
         for i, s, msg in self.bad:
             diag("warning", f"configuration {i}: {s}: {msg}")
         more = sum(v for k, v in self.counts.items() if k != "ok") - len(self.bad)
