@@ -10,7 +10,8 @@ STAMP   = $(VENV)/.installed
 SHARED ?= ../shared
 FUZZ_SECONDS ?= 120
 
-.PHONY: all install demo test test-all fuzz man bench bench-parse bench-validate clean
+.PHONY: all install demo test test-all fuzz man bench bench-parse bench-validate bench-graph bench-solve \
+        bench-cable clean
 
 all: test
 
@@ -23,18 +24,35 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-# The main job on shipped examples: gate the files with validate, convert
-# Part 21 -> JSON model -> Part 21, and prove that the canonical form is a
-# fixed point of the round trip; then validate the whole generated corpus.
+# The main job on shipped examples (outputs in build/): gate a file with validate, prove the
+# canonical Part 21 is a fixed point of the JSON round trip, convert a 1996-layout (AP214)
+# mechanism to AP242 and gate the result, analyse the four-bar's structure, build a Puma 560
+# from its DH table and follow a tool path by inverse analysis, solve the four-bar over a crank
+# sweep and sample the results, route a cable along a moving end, validate the whole corpus.
 demo: $(STAMP)
 	@mkdir -p build
 	$(P105) validate --pass examples/four_bar_ap242.stp | $(P105) parse -o build/four_bar.json
 	$(P105) export --to p21 build/four_bar.json -o build/four_bar.stp
 	$(P105) parse build/four_bar.stp | $(P105) export --to p21 | cmp - build/four_bar.stp
 	$(P105) parse --stream examples/slider_crank_p105_1996_ap214.stp | $(P105) export --to p21 > build/slider_crank.stp
+	$(P105) -q export --schema ap242 examples/slider_crank_p105_1996_ap214.stp \
+	  | $(P105) validate --pass -o build/slider_crank_ap242.report > build/slider_crank_ap242.stp
+	$(P105) graph examples/four_bar_ap242.stp -o build/four_bar_graph.json
+	$(P105) graph --enrich examples/four_bar_ap242.stp | $(P105) validate --pass -o build/four_bar_enriched.report \
+	  > build/four_bar_enriched.stp
+	$(P105) convert-dh-su --convention standard examples/puma560_dh.csv \
+	  | $(P105) validate --pass -o build/puma560.report > build/puma560.stp
+	$(P105) solve build/puma560.stp --path examples/puma560_tool_path.jsonl --target-link link6 --to csv \
+	  -o build/puma560_tool_path.csv
+	$(P105) solve examples/four_bar_ap242.stp --values examples/four_bar_crank.csv --angle-unit deg --to jsonl \
+	  -o build/four_bar_motion.jsonl
+	$(P105) solve examples/four_bar_ap242.stp --values examples/four_bar_crank.csv --angle-unit deg \
+	  | $(P105) validate --pass -o build/four_bar_solved.report \
+	  | $(P105) interpolate --what configurations --count 73 --to csv -o build/four_bar_configurations.csv
+	$(P105) solve --scene examples/cable_scene.json --keypoints examples/cable_keypoints.jsonl -o build/cable.jsonl
 	$(P105) validate -f sarif -o build/corpus.sarif tests/data/corpus/*_ap214.stp tests/data/corpus/*_ap242.stp
 	$(P105) validate --schema p105 tests/data/corpus/*_p105.stp
-	@echo "demo: examples validate clean, round trip is byte-stable (build/)"
+	@echo "demo: every step passed; outputs in build/"
 
 test: $(STAMP)
 	$(PY) -m pytest -q -m "not slow"
@@ -48,7 +66,7 @@ fuzz: $(STAMP)
 man: $(STAMP)
 	$(PY) -m p105cli.manpages man
 
-bench: bench-parse bench-validate
+bench: bench-parse bench-validate bench-graph bench-solve bench-cable
 
 bench-parse: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
@@ -56,6 +74,9 @@ bench-parse: $(STAMP)
 
 bench-validate: $(STAMP)
 	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-validate.md
+
+bench-graph: $(STAMP)
+	$(PY) bench/bench_graph.py --markdown docs/benchmarks-graph.md
 
 # Cable statics: patent vs rod vs scipy solve_bvp vs PyElastica (installed for this target only).
 bench-cable: $(STAMP)
