@@ -67,10 +67,11 @@ man: $(STAMP)
 	$(PY) -m p105cli.manpages man
 
 bench: bench-parse bench-validate bench-graph bench-solve bench-cable
+	$(PY) bench/collect_benchmarks.py
 
 bench-parse: $(STAMP)
 	$(PY) -m pip install --quiet -e '.[bench]'
-	$(PY) bench/bench_parse.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks.md
+	$(PY) bench/bench_parse.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-parse.md
 
 bench-validate: $(STAMP)
 	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-validate.md

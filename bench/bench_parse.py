@@ -3,7 +3,7 @@
 
 Usage (this is what ``make bench-parse`` runs)::
 
-    python bench/bench_parse.py --corpus ../shared/corpus/big --markdown docs/benchmarks.md
+    python bench/bench_parse.py --corpus ../shared/corpus/big --markdown docs/benchmarks-parse.md
 
 For every ``*.step`` / ``*.stp`` file of the corpus, and side by side in one
 run, five ways of reading it are timed:
