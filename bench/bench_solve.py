@@ -342,6 +342,16 @@ def markdown(fk, loops, ik, repeat) -> str:
         "residual: the closing Newton step (taken from the last evaluation, at no extra cost) puts "
         "it under the tolerance at every setting, and a configuration whose recomputed residual "
         "exceeds ten times the tolerance would be reported `not_converged`.",
+        "- The forward rate comes from folding each revolute pair's constant frames into one matrix "
+        "per joint (`T_link1_link2 = P1 Rz(q) P2^-1`; a P1 that commutes with `Rz` moves to the right), "
+        "turning two columns by the joint angle and multiplying each block of 4096 placements, seen "
+        "as one (4b, 4) matrix, by that constant: one single-threaded BLAS product per joint and "
+        "block (larger blocks start OpenBLAS threads, which made the products four times slower here).",
+        "- The loop rows: the Jacobian of a revolute loop is one product per factor with the joint "
+        "axes, the conditioning and tangent of the continuation come from `J_u^T J_u` where it is "
+        "clearly regular (the SVD only near the singular threshold). Against the earlier implementation "
+        "on this benchmark: the same statuses and Newton iterations, values within 1e-15 rad (the "
+        "round-off of the Jacobian).",
         "- p105 stops at the tolerance asked for; the Pinocchio CLIK loop above iterates until its "
         "error norm is under the tolerance and its last full step lands at round-off, which is why "
         "its errors do not follow the tolerance. roboticstoolbox `ik_LM` reports success with the "

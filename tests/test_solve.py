@@ -139,6 +139,47 @@ def test_forward_is_batched_and_matches_single_calls(ref):
     assert np.array_equal(batch, one)
 
 
+def test_forward_mixed_tree_over_several_blocks_matches_a_plain_product():
+    # Revolute pairs forward and crossed backwards, with pair frames that do and do not commute
+    # with the joint rotation, a prismatic pair, and more configurations than one block of the
+    # batched evaluation: against the Part 105 product P1 M(q) P2^-1 written out per configuration.
+    from p105cli.kinematics.placements import transform, ypr_rotation
+
+    rng = np.random.default_rng(11)
+
+    def rnd():
+        return transform(ypr_rotation(*rng.uniform(-2, 2, 3)), rng.uniform(-0.5, 0.5, 3))
+
+    zc = compose(rot_z(0.3), trans_z(0.2))            # a rotation about z and a shift along z
+    links = [Link(n) for n in "abcdef"]
+    pairs = [Pair("p1", "revolute", "a", "b", rnd(), rnd()),
+             Pair("p2", "revolute", "c", "b", rnd(), zc),      # crossed backwards (b -> c)
+             Pair("p3", "revolute", "b", "d", zc, rnd()),
+             Pair("p4", "prismatic", "d", "e", rnd(), rnd()),
+             Pair("p5", "revolute", "f", "e", zc, rnd())]      # backwards, P2 generic
+    mech = Mechanism("mixed", links, pairs, "a", T_world_base=rnd())
+    pl = solver.plan(mech)
+    n = 2 * 4096 + 37
+    Q = rng.uniform(-3, 3, (n, mech.value_count))
+    got = solver.forward(pl, Q)
+    pick = np.r_[0:5, 4090:4100, n - 5:n]
+    prism = pl.types[3]
+    for b in pick:
+        q = Q[b]
+        M = [rot_z(q[0]), rot_z(q[1]), rot_z(q[2]), prism.motion(q[3:4][None], **pl.params[3])[0], rot_z(q[4])]
+        A = [p.P1 @ m @ inverse(p.P2) for p, m in zip(pairs, M)]
+        want = {"a": mech.T_world_base}
+        want["b"] = want["a"] @ A[0]
+        want["c"] = want["b"] @ inverse(A[1])
+        want["d"] = want["b"] @ A[2]
+        want["e"] = want["d"] @ A[3]
+        want["f"] = want["e"] @ inverse(A[4])
+        for name, T in want.items():
+            assert np.abs(got[b, pl.link_index[name]] - T).max() < 1e-13, (b, name)
+    assert np.isfinite(got).all()
+    assert np.array_equal(got[pick], solver.forward(pl, Q[pick]))
+
+
 # ---------------------------------------------------------------- closed loops: the reference four-bar
 
 def _reference_four_bar(fb, branch, *, scale=1.0):
@@ -187,6 +228,33 @@ def test_loop_jacobian_matches_finite_differences(ref):
         dq[k] = h
         fd = (solver.closure(pl, Q + dq, jacobian=False)[0] - solver.closure(pl, Q - dq, jacobian=False)[0]) / (2 * h)
         assert np.abs(fd - J[:, :, k]).max() < 1e-8
+
+
+def test_conditioning_and_tangent_agree_with_the_svd_near_and_far_from_singular(ref):
+    # The continuation's conditioning and tangent skip the SVD where J_u is clearly regular;
+    # against numpy's SVD and pseudo-inverse, with Jacobians from regular to rank-deficient.
+    fb = ref["closed_loop"]["fourbar"][0]
+    pl = solver.plan(_reference_four_bar(fb, "open"))
+    u, d = np.array([1, 2, 3]), np.array([0])
+    prob = solver._Loops(pl, u, d, np.ones(3), np.ones(1), 1e-12, 30, rank=3)
+    rng = np.random.default_rng(5)
+    conds = np.r_[1.0, 0.3, 1e-2, 1e-3, np.geomspace(1e-4, 1e-6, 24), 1e-9, 1e-13]
+    U = np.linalg.qr(rng.normal(size=(len(conds), 6, 3)))[0]
+    V = np.linalg.qr(rng.normal(size=(len(conds), 3, 3)))[0]
+    S = np.stack([np.ones_like(conds), np.sqrt(conds), conds], axis=1) * rng.uniform(0.5, 2, (len(conds), 1))
+    Ju = U @ (S[:, :, None] * np.swapaxes(V, 1, 2))
+    Jd = rng.normal(size=(len(conds), 6, 1))
+    cond, T = prob.conditioning_and_tangent(Ju, Jd)
+    sv = np.linalg.svd(Ju, compute_uv=False)
+    want = sv[:, 2] / sv[:, 0]
+    assert np.allclose(want, conds, rtol=1e-6)
+    assert list(cond > prob.singular_below) == list(want > prob.singular_below)
+    assert np.allclose(cond, want, rtol=1e-4, atol=0)
+    regular = want > 1e-8
+    pinv = np.linalg.pinv(Ju[regular], rcond=1e-10)
+    Tw = -(pinv @ Jd[regular])
+    assert np.abs(T[regular] - Tw).max() <= 1e-6 * np.abs(Tw).max()
+    assert np.isfinite(T).all()
 
 
 def test_spatial_loop_jacobian_matches_finite_differences():

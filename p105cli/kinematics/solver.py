@@ -241,6 +241,37 @@ def _inv(T) -> np.ndarray:
     return out
 
 
+_FK_BLOCK = 4096   # configurations per block in forward(): the block's link placements stay in cache
+
+
+def _z_commutes(L) -> bool:
+    """True when the rigid transform L is a rotation about z and a shift along z (so
+    ``L Rz(q) = Rz(q) L``: the constant can move to the other side of the joint rotation)."""
+    R, t = L[:3, :3], L[:3, 3]
+    return (abs(R[2, 2] - 1.0) <= 4e-16 and max(abs(R[0, 2]), abs(R[1, 2]), abs(R[2, 0]), abs(R[2, 1])) <= 4e-16
+            and max(abs(t[0]), abs(t[1])) <= 1e-15 * (1.0 + abs(t[2])))
+
+
+def _forward_steps(pl: Plan):
+    """Per tree entry: ``(k, parent, child, fwd, col, sgn, L, R)`` with ``A = L Rz(sgn q) R`` for a
+    revolute pair (L None when it folds into R), ``col`` None for any other pair."""
+    cache = pl.__dict__.get("_fk")
+    if cache is not None:
+        return cache
+    steps = []
+    for k, parent, child, fwd in pl.tree:
+        if pl.types[k].kind != "revolute":
+            steps.append((k, parent, child, fwd, None, 1.0, None, None))
+            continue
+        # T_link1_link2 = P1 Rz(q) P2^-1; crossed backwards P2 Rz(-q) P1^-1.
+        L, R = (pl.P1[k], pl.P2inv[k]) if fwd else (pl.P2[k], inverse(pl.P1[k]))
+        if _z_commutes(L):
+            L, R = None, L @ R
+        steps.append((k, parent, child, fwd, pl.slices[k].start, 1.0 if fwd else -1.0, L, np.ascontiguousarray(R)))
+    pl.__dict__["_fk"] = steps
+    return steps
+
+
 def forward(pl: Plan, Q, *, world: bool = True) -> np.ndarray:
     """Placements of every link (B, n_links, 4, 4) in ``pl.link_names`` order for values Q (B, nv).
 
@@ -248,20 +279,77 @@ def forward(pl: Plan, Q, *, world: bool = True) -> np.ndarray:
     (pass solved values). ``world`` prepends ``T_world_base``."""
     Q = np.atleast_2d(np.asarray(Q, dtype=np.float64))
     B = Q.shape[0]
-    # Link-major storage: each link's placements are contiguous (B, 4, 4) blocks.
+    steps = _forward_steps(pl)
+    # Link-major storage: each link's placements are contiguous (B, 4, 4) blocks, so a block of
+    # them is a (4b, 4) matrix and a constant factor is one BLAS product on it.
     out = np.empty((len(pl.link_names), B, 4, 4))
     out[0] = pl.mech.T_world_base if world else np.eye(4)
-    for k, parent, child, fwd in pl.tree:
-        T = _pair_T(pl, k, Q)
-        if not fwd:
-            T = _inv(T)
-        np.matmul(out[parent], T, out=out[child])
+    cols = [s[4] for s in steps if s[4] is not None]
+    sgn = np.array([s[5] for s in steps if s[4] is not None])
+    b = min(_FK_BLOCK, max(B, 1))
+    W = np.empty((b, 4, 4))
+    t0, t1 = np.empty((b, 4)), np.empty((b, 4))
+    for i0 in range(0, B, b):
+        i1 = min(B, i0 + b)
+        n = i1 - i0
+        q = Q[i0:i1]
+        if cols:
+            qr = q[:, cols]
+            C, S = np.cos(qr), np.sin(qr)
+            if (sgn < 0).any():
+                S *= sgn
+        w, a, c_ = W[:n], t0[:n], t1[:n]
+        w0, w1 = w[:, :, 0], w[:, :, 1]
+        j = 0
+        for k, parent, child, fwd, col, _, L, R in steps:
+            P = out[parent, i0:i1]
+            dst = out[child, i0:i1]
+            if col is None:
+                T = _pair_T(pl, k, q)
+                np.matmul(P, T if fwd else _inv(T), out=dst)
+                continue
+            # T_child = T_parent L Rz(q) R: Rz(q) on the right turns columns 0 and 1 only. Blocks
+            # of 4096 keep the (4b, 4) BLAS products single-threaded (OpenBLAS starts threads
+            # from about 16 000 configurations on, which made them four times slower here).
+            c, s = C[:, j, None], S[:, j, None]
+            j += 1
+            if L is None:
+                y0, y1 = P[:, :, 0], P[:, :, 1]
+                w[:, :, 2:] = P[:, :, 2:]
+            else:
+                np.matmul(P.reshape(-1, 4), L, out=w.reshape(-1, 4))
+                y0, y1 = w0, w1
+            np.multiply(y1, c, out=a)
+            np.multiply(y0, s, out=c_)
+            np.subtract(a, c_, out=a)                      # new column 1
+            np.multiply(y0, c, out=c_)
+            np.multiply(y1, s, out=w0)
+            np.add(w0, c_, out=w0)                         # new column 0
+            w1[...] = a
+            np.matmul(w.reshape(-1, 4), R, out=dst.reshape(-1, 4))
     return np.moveaxis(out, 0, 1)
 
 
 def _scale(pl: Plan) -> np.ndarray:
     """Per-value scale that makes lengths dimensionless (1 for angles, 1/size for lengths)."""
     return np.where(pl.angle_mask, 1.0, 1.0 / pl.size)
+
+
+def _jl_map():
+    """(7, 36): the residual Jacobian's map M (6, 6) from the twist, linear in
+    y = (p / size, q_v, q_w) (the constant 1/size diagonal is set separately)."""
+    m = np.zeros((7, 6, 6))
+    for i, (j, k) in enumerate(((1, 2), (2, 0), (0, 1))):
+        # row i: (w x y)_i = w_j y_k - w_k y_j, for y = p / size (rows 0-2) and y = q_v (rows 3-5)
+        for base in (0, 3):
+            m[base + k, base + i, 3 + j] = 1.0
+            m[base + j, base + i, 3 + k] = -1.0
+        m[6, 3 + i, 3 + i] = 1.0
+    return m.reshape(7, 36)
+
+
+_JL_MAP = _jl_map()
+_I3 = np.arange(3)
 
 
 def closure(pl: Plan, Q, *, jacobian: bool = True):
@@ -295,19 +383,16 @@ def closure(pl: Plan, Q, *, jacobian: bool = True):
         qw, qv = _half_quaternion(R)
         r[:, 6 * li + 3:6 * li + 6] = 2.0 * qv
         if jacobian and idx:
-            S = np.concatenate(blocks, axis=-1)                    # spatial twists, loop start frame
-            ps = p / pl.size
-            # d(p / size) = (v + w x p) / size;  d(2 q_v) = q_w w + w x q_v  (left perturbation)
-            v, w = S[:, :3], S[:, 3:]
-            Jl = np.empty((B, 6, S.shape[-1]))
-            Jl[:, 0] = v[:, 0] / pl.size + w[:, 1] * ps[:, 2, None] - w[:, 2] * ps[:, 1, None]
-            Jl[:, 1] = v[:, 1] / pl.size + w[:, 2] * ps[:, 0, None] - w[:, 0] * ps[:, 2, None]
-            Jl[:, 2] = v[:, 2] / pl.size + w[:, 0] * ps[:, 1, None] - w[:, 1] * ps[:, 0, None]
-            a = qw[:, None]
-            Jl[:, 3] = a * w[:, 0] + w[:, 1] * qv[:, 2, None] - w[:, 2] * qv[:, 1, None]
-            Jl[:, 4] = a * w[:, 1] + w[:, 2] * qv[:, 0, None] - w[:, 0] * qv[:, 2, None]
-            Jl[:, 5] = a * w[:, 2] + w[:, 0] * qv[:, 1, None] - w[:, 1] * qv[:, 0, None]
-            J[:, 6 * li:6 * li + 6, idx] = Jl   # a loop owns its rows; a pair appears once in it
+            S = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-1)  # spatial twists
+            # d(p / size) = (v + w x p) / size;  d(2 q_v) = q_w w + w x q_v  (left perturbation):
+            # Jl = M S with M (B, 6, 6) linear in (p / size, q_v, q_w), one product.
+            y = np.empty((B, 7))
+            np.divide(p, pl.size, out=y[:, :3])
+            y[:, 3:6] = qv
+            y[:, 6] = qw
+            M = np.matmul(y, _JL_MAP).reshape(B, 6, 6)
+            M[:, _I3, _I3] = 1.0 / pl.size
+            J[:, 6 * li:6 * li + 6, idx] = M @ S   # a loop owns its rows; a pair appears once in it
     return r, J
 
 
@@ -318,22 +403,29 @@ def _half_quaternion(R):
     identity), which vanishes only at the identity: ``vee(R - R^T) / 2`` would also vanish
     at every half-turn, where Newton can land (a gear train did)."""
     tr = R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2]
-    d = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=-1)
+    d = np.empty(R.shape[:1] + (3,))
+    np.subtract(R[:, 2, 1], R[:, 1, 2], out=d[:, 0])
+    np.subtract(R[:, 0, 2], R[:, 2, 0], out=d[:, 1])
+    np.subtract(R[:, 1, 0], R[:, 0, 1], out=d[:, 2])
     w = 0.5 * np.sqrt(np.maximum(1.0 + tr, 0.0))
     far = w < 0.3  # beyond about 145 degrees: Shepperd's pivoting, no division by a small w
+    if not far.any():
+        return w, d / (4.0 * w)[:, None]
     v = d / (4.0 * np.where(far, 1.0, w))[:, None]
-    if far.any():
-        from .placements import matrix_to_quaternion
-        qf = matrix_to_quaternion(R[far])
-        w = w.copy()
-        w[far], v[far] = qf[:, 0], qf[:, 1:]
+    from .placements import matrix_to_quaternion
+    qf = matrix_to_quaternion(R[far])
+    w = w.copy()
+    w[far], v[far] = qf[:, 0], qf[:, 1:]
     return w, v
 
 
 def _revolute_loop(pl: Plan, li: int):
     """Constants of a loop of revolute pairs only (None otherwise): every factor, forward or
-    backwards, is ``E0 + cos q E1 + sin q E2`` (backwards: ``P2 Rz(-q) P1^-1``), and every
-    left twist is constant."""
+    backwards, is ``E0 + cos q E1 + sin q E2`` (backwards: ``P2 Rz(-q) P1^-1``), stored as
+    (n, 3, 16); and every left twist is constant: ``sgn (p x z, z)`` of the joint axis (z, p)
+    in the factor's left frame (P1 forward, P2 backwards), kept as homogeneous columns
+    (n, 4, 2) so that the twists in the loop's start frame are one product with the prefix
+    placements."""
     cache = pl.__dict__.setdefault("_revloops", {})
     if li in cache:
         return cache[li]
@@ -341,42 +433,55 @@ def _revolute_loop(pl: Plan, li: int):
     if not lp or any(pl.types[k].kind != "revolute" for k, _ in lp):
         cache[li] = None
         return None
-    E, X, cols = [], [], []
+    E, H, X, sig, cols = [], [], [], [], []
     P1inv = inverse(pl.P1)
     for k, fwd in lp:
         if fwd:
-            E.append([pl.P1[k] @ e @ pl.P2inv[k] for e in _E])
+            E.append([(pl.P1[k] @ e @ pl.P2inv[k]).ravel() for e in _E])
         else:
-            E.append([pl.P2[k] @ e @ P1inv[k] * sgn for e, sgn in zip(_E, (1.0, 1.0, -1.0))])
+            E.append([(pl.P2[k] @ e @ P1inv[k] * sgn).ravel() for e, sgn in zip(_E, (1.0, 1.0, -1.0))])
+        F = pl.P1[k] if fwd else pl.P2[k]
+        H.append(np.stack([np.r_[F[:3, 2], 0.0], np.r_[F[:3, 3], 1.0]], axis=1))
         X.append(_const_twists(pl, k, fwd)[:, 0])
+        sig.append(1.0 if fwd else -1.0)
         cols.append(pl.slices[k].start)
-    cache[li] = (np.array(E), np.array(X), np.array(cols))
+    cache[li] = (np.array(E), np.array(H), np.array(X), np.array(sig), np.array(cols))
     return cache[li]
 
 
 def _revolute_loop_terms(rev, Q, jacobian):
     """T_loop (B, 4, 4) and the spatial twists (B, 6, n) of a revolute loop, all factors at once."""
-    E, X, cols = rev
+    E, H, X, sig, cols = rev
+    n, B = len(cols), Q.shape[0]
     q = Q[:, cols].T                                                   # (n, B)
-    A = E[:, None, 0] + np.cos(q)[..., None, None] * E[:, None, 1] + np.sin(q)[..., None, None] * E[:, None, 2]
-    n, B = q.shape
-    prefix = np.empty((n, B, 4, 4))
-    prefix[0] = A[0]
-    for k in range(1, n):
-        np.matmul(prefix[k - 1], A[k], out=prefix[k])
+    # A = E0 + cos q E1 + sin q E2, in this order (the residual's round-off, hence the last
+    # bits of the converged values, do not depend on how this is vectorised).
+    A = np.multiply(np.cos(q)[..., None], E[:, None, 1])                # (n, B, 16)
+    A += E[:, None, 0]
+    A += np.sin(q)[..., None] * E[:, None, 2]
+    A = A.reshape(n, B, 4, 4)
+    if n == 1:
+        prefix = A
+    else:
+        prefix = np.empty((n, B, 4, 4))
+        np.matmul(A[0], A[1], out=prefix[1])
+        prefix[0] = A[0]
+        for k in range(2, n):
+            np.matmul(prefix[k - 1], A[k], out=prefix[k])
     if not jacobian:
         return prefix[-1], None, cols
     S = np.empty((B, 6, n))
     S[:, :, 0] = X[0]
     if n > 1:
-        R, p = prefix[:-1, :, :3, :3], prefix[:-1, :, :3, 3]           # (n-1, B, ...)
-        w = (R @ X[1:, None, 3:, None])[..., 0]                         # (n-1, B, 3)
-        v = (R @ X[1:, None, :3, None])[..., 0]
-        v[..., 0] += p[..., 1] * w[..., 2] - p[..., 2] * w[..., 1]
-        v[..., 1] += p[..., 2] * w[..., 0] - p[..., 0] * w[..., 2]
-        v[..., 2] += p[..., 0] * w[..., 1] - p[..., 1] * w[..., 0]
-        S[:, :3, 1:] = v.transpose(1, 2, 0)
-        S[:, 3:, 1:] = w.transpose(1, 2, 0)
+        # (n-1, B, 4, 2): each prefix block as one (4B, 4) matrix times its factor's axis
+        G = np.matmul(prefix[:-1].reshape(n - 1, 4 * B, 4), H[1:]).reshape(n - 1, B, 4, 2)
+        w = G[:, :, :3, 0] * sig[1:, None, None]                          # (n-1, B, 3)
+        p = G[:, :, :3, 1]
+        Sv, Sw = S[:, :3, 1:], S[:, 3:, 1:]                               # (B, 3, n-1) views
+        Sw[...] = w.transpose(1, 2, 0)
+        Sv[:, 0] = (p[..., 1] * w[..., 2] - p[..., 2] * w[..., 1]).T      # v = p x w
+        Sv[:, 1] = (p[..., 2] * w[..., 0] - p[..., 0] * w[..., 2]).T
+        Sv[:, 2] = (p[..., 0] * w[..., 1] - p[..., 1] * w[..., 0]).T
     return prefix[-1], S, cols
 
 
@@ -386,10 +491,13 @@ def _loop_errors(pl: Plan, Q):
     B = Q.shape[0]
     pos, rot = np.zeros(B), np.zeros(B)
     for lp in pl.loops:
-        T = np.broadcast_to(np.eye(4), (B, 4, 4))
+        T = None
         for k, fwd in lp:
             A = _pair_T(pl, k, Q)
-            T = T @ (A if fwd else _inv(A))
+            A = A if fwd else _inv(A)
+            T = A if T is None else T @ A
+        if T is None:
+            continue
         pos = np.maximum(pos, np.linalg.norm(T[:, :3, 3], axis=-1))
         c = np.clip(0.5 * (T[:, 0, 0] + T[:, 1, 1] + T[:, 2, 2] - 1.0), -1.0, 1.0)
         s = 0.5 * np.linalg.norm(np.stack([T[:, 2, 1] - T[:, 1, 2], T[:, 0, 2] - T[:, 2, 0],
@@ -573,7 +681,10 @@ class _Loops:
             # under the tolerance: r_next ~ C r^2 with C = r / r_prev^2.
             C = rest / np.maximum(prev, 1e-300) ** 2
             fin = (rest <= self.tol) | ((rest < 1e-4) & (rest < 0.1 * prev) & (C * rest * rest <= 0.01 * self.tol))
-            r[a], Ju[a], Jd[a], res[a], done[a] = rt, Jt, Jdt, rest, fin
+            if full:
+                r, Ju, Jd, res, done = rt, Jt, Jdt, rest, fin
+            else:
+                r[a], Ju[a], Jd[a], res[a], done[a] = rt, Jt, Jdt, rest, fin
             it[a] += 1
         self.last_Jd = Jd
         if done.any():
@@ -595,7 +706,33 @@ class _Loops:
         return -np.einsum("bij,bi->bj", Vt, c)
 
     def conditioning_and_tangent(self, Ju, Jd):
-        """:meth:`conditioning` and :meth:`tangent` from one SVD of J_u."""
+        """:meth:`conditioning` and :meth:`tangent` from one SVD of J_u.
+
+        When J_u has full column rank (the common case) the regular configurations skip the
+        SVD: the conditioning estimated from the eigenvalues of J_u^T J_u (about eps / cond^2
+        off) is far enough above :attr:`singular_below` to decide, and the pseudo-inverse is
+        then the plain inverse ``(J_u^T J_u)^-1 J_u^T`` (no singular value is cut). Only the
+        others (near or below the threshold) take the SVD, so the decisions are the SVD's."""
+        B, m = Ju.shape[0], Ju.shape[-1]
+        if self.rank == m and m and B > 1:   # (one configuration: the SVD costs the same)
+            Jt = np.swapaxes(Ju, -1, -2)
+            JtJ = Jt @ Ju
+            lam = np.linalg.eigvalsh(JtJ)
+            est = np.sqrt(np.maximum(lam[:, 0], 0.0) / np.maximum(lam[:, -1], 1e-300))
+            easy = est > 4.0 * self.singular_below
+            if easy.any():
+                cond = est.copy()
+                T = np.empty((B, m, Jd.shape[-1]))
+                e = slice(None) if easy.all() else np.flatnonzero(easy)
+                T[e] = np.linalg.solve(JtJ[e], Jt[e] @ Jd[e])
+                T *= -self.scale_d[None, None, :] / self.scale_u[None, :, None]
+                if not easy.all():
+                    h = np.flatnonzero(~easy)
+                    cond[h], T[h] = self._conditioning_and_tangent_svd(Ju[h], Jd[h])
+                return cond, T
+        return self._conditioning_and_tangent_svd(Ju, Jd)
+
+    def _conditioning_and_tangent_svd(self, Ju, Jd):
         U, S, Vt = np.linalg.svd(Ju, full_matrices=False)
         if self.rank == 0:
             cond = np.ones(Ju.shape[0])
