@@ -211,9 +211,9 @@ def main() -> int:
                          f"| {r['cli'] * 1000:.0f} ({r['cli_cpu'] * 1000:.0f}) "
                          f"| {r['cli_enrich'] * 1000:.0f} ({r['cli_enrich_cpu'] * 1000:.0f}) |")
         lines += ["", "CPU time by stage of the 100-link run in a fresh interpreter (ms). "
-                      "`start-up and exit` is the rest of the process's CPU time: mostly freeing "
-                      "every object at interpreter exit (the unpickled schema and the population); "
-                      "ending the process with `os._exit` after flushing would save it.", "",
+                      "`start-up and exit` is the rest of the process's CPU time, measured here in a "
+                      "plain interpreter that still frees every object at exit; the `p105` console "
+                      "script ends with `os._exit` once its output is flushed and skips that.", "",
                   "| " + " | ".join(target["stages"]) + " |",
                   "|" + "---:|" * len(target["stages"]),
                   "| " + " | ".join(f"{v * 1000:.0f}" for v in target["stages"].values()) + " |"]

@@ -1208,6 +1208,7 @@ def load_schemas(path, cache: bool = True) -> list:
                 obj = None
             finally:
                 if enabled:
+                    gc.freeze()  # a schema lives as long as the process: keep it out of collections
                     gc.enable()
             if (isinstance(obj, tuple) and len(obj) == 3 and obj[0] == PARSER_VERSION
                     and obj[1] == digest and isinstance(obj[2], list)):
