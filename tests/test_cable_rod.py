@@ -489,6 +489,47 @@ def test_warm_start_matches_cold_and_is_cheaper():
     assert np.abs(far.nodes - solve_rod(heavy_3d(1.5), segments=40).nodes).max() < 1e-9
 
 
+def test_key_point_path_one_newton_step_per_mesh():
+    # once three key points are known the start is extrapolated quadratically along the path:
+    # one Newton step reaches tol 1e-10, and the answer is the cold solve's
+    sol = solve_rod(heavy_3d(0.0), segments=40)
+    its = []
+    for t in np.linspace(0.01, 0.2, 20):
+        sol = solve_rod(heavy_3d(t), segments=40, warm=sol.state())
+        its.append(sol.iterations)
+    assert its[3:] == [1] * 17
+    cold = solve_rod(heavy_3d(0.2), segments=40)
+    assert np.abs(cold.nodes - sol.nodes).max() < 1e-10
+    assert np.abs(cold.force_end - sol.force_end).max() < 1e-8
+    assert sol.stable and cold.stable
+
+
+def test_richardson_key_point_path_matches_cold():
+    # both meshes follow their own histories (one step each), checked to stay on one branch; the
+    # extrapolated answer, its loads, error estimate and stability equal the cold solve's
+    sol = solve_rod(heavy_3d(0.0), segments=24, richardson=True)
+    its = []
+    for t in np.linspace(0.01, 0.15, 15):
+        sol = solve_rod(heavy_3d(t), segments=24, richardson=True, warm=sol.state())
+        its.append(sol.iterations)
+    assert its[4:] == [2] * 11
+    cold = solve_rod(heavy_3d(0.15), segments=24, richardson=True)
+    assert np.abs(cold.nodes - sol.nodes).max() < 1e-10
+    assert np.abs(cold.frames - sol.frames).max() < 1e-9
+    for a, b in ((cold.force_start, sol.force_start), (cold.moment_end, sol.moment_end)):
+        assert np.abs(a - b).max() < 1e-7 * np.abs(a).max()
+    assert sol.error_estimate == pytest.approx(cold.error_estimate, rel=1e-6)
+    assert sol.stable is True and cold.stable is True
+    assert sol.quaternions.shape == (24, 4)
+    assert np.allclose(quaternion_to_matrix(sol.quaternions[5]), quaternion_to_matrix(cold.quaternions[5]),
+                       atol=1e-9)
+    # a jump off the path: continuation on both meshes, still the cold answer
+    far = solve_rod(heavy_3d(1.2), segments=24, richardson=True, warm=sol.state())
+    cold_far = solve_rod(heavy_3d(1.2), segments=24, richardson=True)
+    assert far.status == "ok" and far.stable is True
+    assert np.abs(far.nodes - cold_far.nodes).max() < 1e-9
+
+
 def test_free_start_is_the_reversed_cantilever():
     a = solve_rod(cantilever(1.0), segments=40)
     # the same cable held at its far end: start free (with the load), end clamped at the origin
