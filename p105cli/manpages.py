@@ -301,6 +301,8 @@ PAGES: dict[str, dict] = {
             "status is 1 when any configuration is not ok.",
         ],
         "examples": [
+            ("Run the motion program the file carries (its kinematic_control), 50 samples:",
+             ["p105 solve four_bar_ap214.stp --program --count 50 --to csv"]),
             ("Turn the crank of a four-bar through the angles of a CSV file (degrees):",
              ["p105 solve four_bar.stp --values crank.csv --angle-unit deg --to jsonl"]),
             ("A full turn in 361 steps as a table:",

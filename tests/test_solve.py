@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import EXAMPLES, SHARED, run_cli
+from conftest import EXAMPLES, ROOT, SHARED, run_cli
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.placements import compose, inverse, rot_x, rot_z, su_parameters, trans_x, trans_z
@@ -619,3 +619,46 @@ def test_cli_degrees_and_millimetres_in_and_out(cli):
     assert abs(math.radians(b["pairs"]["C"]) - a["pairs"]["C"]) < 1e-12
     assert abs(b["links"]["rocker"][0][3] - 1000.0 * a["links"]["rocker"][0][3]) < 1e-9
     assert _records(deg.stdout)[-1]["units"] == {"length": "mm", "angle": "deg"}
+
+
+@pytest.mark.parametrize("key", ["four_bar", "slider_crank"])
+@pytest.mark.parametrize("profile", ["ap214", "ap242"])
+def test_program_runs_the_models_own_motion(key, profile):
+    """--program: the 1996 files' configuration sequence drives the actuated pair, the AP242
+    files' prescribed path is followed by inverse analysis; either way every pair value
+    at the program's nodes is the corpus generator's solved state (its own position solver)."""
+    from p105cli.corpus import MECHANISMS, configuration
+
+    mech = MECHANISMS[key]()
+    axis = 0 if profile == "ap242" else 2
+    truth = [configuration(mech, d, axis) for d in mech.drives]
+    r = run_cli("solve", ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp", "--program",
+                "--to", "jsonl", "--no-timings")
+    assert r.returncode == 0, r.stderr
+    recs = [json.loads(x) for x in r.stdout.decode().splitlines()]
+    confs = [x for x in recs if x["type"] == "configuration"]
+    assert [c["t"] for c in confs] == [0.0, 0.5, 1.0]
+    for c, state in zip(confs, truth):
+        assert c["status"] == "ok"
+        for p in mech.pairs:
+            (want,) = state[p.name].values()
+            if p.kind in ("prismatic", "rack_and_pinion"):
+                want *= 1e-3
+            got = c["pairs"][p.name]
+            d = got - want
+            if p.kind == "revolute":
+                d = (d + np.pi) % (2 * np.pi) - np.pi
+            assert abs(d) < 1e-9, (p.name, got, want)
+
+
+def test_program_sampled_and_refused_without_a_program(tmp_path):
+    f = ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp"
+    r = run_cli("solve", f, "--program", "--count", "5", "--to", "csv")
+    assert r.returncode == 0, r.stderr
+    assert len(r.stdout.decode().splitlines()) == 6
+    r = run_cli("solve", f, "--count", "5")
+    assert r.returncode == 2 and b"need --program" in r.stderr
+    bare = tmp_path / "bare.stp"
+    bare.write_text("\n".join(line for line in f.read_text().splitlines() if "KINEMATIC_CONTROL" not in line))
+    r = run_cli("solve", bare, "--program")
+    assert r.returncode == 2 and b"no kinematic_control" in r.stderr

@@ -13,7 +13,7 @@ import os
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, load_document, open_output, \
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, load_document, naming_source, open_output, \
     read_input_bytes, report_warnings, stderr_is_terminal
 from .options import output_option
 
@@ -57,6 +57,14 @@ def _key_label(key) -> str:
 @click.option("--target-link", metavar="LINK", default=None, help="The link whose frame follows --path.")
 @click.option("--target-frame", metavar="NAME", default=None,
               help="A named frame of --target-link to put on the path (default: the link frame).")
+@click.option("--program", is_flag=True,
+              help="Run the model's own motion program (its kinematic_control): a configuration sequence "
+                   "drives the actuated pairs through its configurations; a prescribed path (AP242) is "
+                   "followed by inverse analysis of its link frame.")
+@click.option("--count", type=click.IntRange(1, 100_000_000), default=None, metavar="N",
+              help="With --program: N evenly spaced samples of the program (default: its nodes).")
+@click.option("--step", type=float, default=None, metavar="DT",
+              help="With --program: a sample every DT of the program's parameter, nodes included.")
 @click.option("--tol", type=float, default=1e-10, show_default=True,
               help="Loop residual / pose error: lengths relative to the model size, rotations in radians.")
 @click.option("--max-iter", type=click.IntRange(1, 10_000), default=30, show_default=True,
@@ -80,8 +88,8 @@ def _key_label(key) -> str:
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
 @output_option
-def solve(model, values, sets, sweeps, path, target_link, target_frame, tol, max_iter, to, angle_unit, length_unit,
-          mechanism_name, schema, scene, keypoints, timings, output):
+def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, tol, max_iter, to,
+          angle_unit, length_unit, mechanism_name, schema, scene, keypoints, timings, output):
     """Position analysis of a mechanism (Part 21 or p105/1 JSON, sniffed) along a motion.
 
     Forward: the pairs named in --values/--set are driven (without them, the
@@ -103,6 +111,15 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, tol, max
         raise click.UsageError("--path (inverse analysis) cannot be combined with --values, --set or --sweep")
     if sweeps and values is not None:
         raise click.UsageError("--sweep and --values cannot be combined")
+    if program and (values is not None or sets or sweeps or path is not None):
+        raise click.UsageError("--program runs the model's own motion: it cannot be combined with --values, "
+                               "--set, --sweep or --path")
+    if (count is not None or step is not None) and not program:
+        raise click.UsageError("--count and --step sample a motion program: they need --program")
+    if count is not None and step is not None:
+        raise click.UsageError("give at most one of --count and --step")
+    if step is not None and not (step > 0.0 and math.isfinite(step)):
+        raise click.UsageError("--step must be a positive number")
     if model is None and scene is None:
         model = "-"
     stdin_users = [n for n, v in (("MODEL", model), ("--values", values), ("--path", path)) if v == "-"]
@@ -130,9 +147,18 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, tol, max
         return
 
     from p105cli.kinematics import solver
+    prog = _program(doc, mech, schema, count, step) if program else None
     try:
         pl = solver.plan(mech)
-        if path is not None:
+        if prog is not None and prog[0] == "path":
+            _, t, poses, target_link, frame = prog
+            blocks = iter([solver.solve_path(mech, target_link, poses, frame=frame, tol=tol,
+                                             max_iter=4 * max_iter, pl=pl)])
+        elif prog is not None:
+            _, t, driven = prog
+            blocks = solver.iter_motion(mech, driven, tol=tol, max_iter=max_iter, pl=pl,
+                                        block=None if to == "model" else 4096)
+        elif path is not None:
             from p105cli.kinematics.motion_io import read_poses
             text, source = _read_text(path, "the path")
             t, poses = read_poses(text, source, length=lf)
@@ -156,7 +182,7 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, tol, max
     except solver.SolveError as err:
         raise InputError(f"{model if model not in (None, '-') else '<stdin>'}: {err}") from None
 
-    inverse = path is not None
+    inverse = path is not None or (prog is not None and prog[0] == "path")
     tally = _Tally(inverse)
     motion = [] if scene_dict is not None else None
     with open_output(output, (model, values, path, scene, keypoints)) as out:
@@ -282,6 +308,71 @@ def _angle_checker(mech):
             raise InputError(f"pair {name!r} has {len(mask)} value(s); {_key_label(key)} does not exist")
         return mask[j] if isinstance(key, tuple) or len(mask) == 1 else mask[0]
     return is_angle
+
+
+def _program(doc, mech, schema, count, step):
+    """The model's motion program, sampled: ``("values", t, driven)`` for a configuration
+    sequence (the actuated pairs, else every pair it values), ``("path", t, poses,
+    link, frame)`` for a prescribed path."""
+    from p105cli.kinematics.reader import population
+    from p105cli.motion.configurations import sample_configurations
+    from p105cli.motion.paths import PathError, sample_path
+    from p105cli.motion.sampling import Plan
+
+    source = getattr(doc, "source", None) or "<stdin>"
+    with naming_source(doc):
+        pop, _ = population(doc, schema)
+        programs = []
+        if "kinematic_control" in pop.schema.entities:
+            for c in pop.ids_of_type("kinematic_control"):
+                v = pop.instance(c).get("contained_kinematic_programs")
+                programs += [x["ref"] for x in (v if isinstance(v, list) else [v])
+                             if isinstance(x, dict) and "ref" in x]
+        if not programs:
+            raise InputError(f"{source}: the model has no kinematic_control (motion program); "
+                             "drive it with --values, --set, --sweep or --path")
+        prog = programs[0]
+        if len(programs) > 1:
+            diag("note", f"{source}: the model has {len(programs)} motion programs; running the first, #{prog}")
+        plan = Plan(step=step, count=count, nodes=step is not None)
+        types = pop.instance(prog).types
+        if "interpolated_configuration_sequence" in types:
+            from p105cli.motion.reader import read_configuration_sequences
+            seqs, kinds, _ = read_configuration_sequences(doc, pop=pop)
+            seq = next(q for q in seqs if q.id == prog)
+            t = plan.grid(seq.t_start, seq.t_end, [n.t for n in seq.nodes])
+            sampled = sample_configurations(seq, t, kinds)
+            names = [p.name for p in mech.pairs if p.actuated and p.name in sampled.values] \
+                or [n for n in seq.pair_names if n in mech.pair_names]
+            driven = {}
+            for name in names:
+                vals = sampled.values[name]
+                if vals.shape[1] == 1:
+                    driven[name] = vals[:, 0]
+                else:
+                    driven.update({(name, j): vals[:, j] for j in range(vals.shape[1])})
+            return "values", t, driven
+        from p105cli.motion.reader import read_paths
+        paths = [p for p in read_paths(doc, pop=pop).paths if p.holder_id == prog]
+        if not paths:
+            raise InputError(f"{source}: #{prog}: the motion program is a "
+                             f"{'+'.join(sorted(pop.instance(prog).leaf_types))} that p105 cannot run "
+                             "(it runs configuration sequences and prescribed paths with geometry)")
+        path = paths[0]
+        if path.link is None or path.link not in mech.link_names:
+            raise InputError(f"{source}: #{path.id}: the path is tied to no link of mechanism {mech.name!r}")
+        frame = None
+        if path.frame is not None:
+            frames = mech.link(path.link).frames
+            frame = frames.get(path.frame)
+            if frame is None:  # the frame is the link frame itself, or a pair frame of the link
+                frame = next((v for k, v in frames.items() if k.startswith(path.frame)), None)
+        t = plan.grid(path.t_start, path.t_end, path.breakpoints)
+        try:
+            poses = sample_path(path, t).T
+        except PathError as err:
+            raise InputError(f"{source}: #{path.id}: {err}") from None
+        return "path", t, poses, path.link, frame
 
 
 def _driven(mech, values, sets, sweeps, lf, af):

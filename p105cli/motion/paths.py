@@ -107,14 +107,18 @@ class PathSegment:
 class KinematicPath:
     """A path of a link frame: segments in increasing, contiguous ``t``.
 
-    ``link``/``frame``: which link frame follows the path (when known);
-    ``role``: ``"prescribed"``, ``"resulting"`` or ``""``."""
+    ``link``/``frame``: which link frame follows the path (when known: the
+    link's name and the name of its frame, None for the link frame itself);
+    ``role``: ``"prescribed"``, ``"resulting"`` or ``""``; ``holder_id``: the
+    representation holding the path (what a kinematic_control names)."""
 
     name: str
     segments: tuple
     link: Optional[str] = None
     role: str = ""
     id: Optional[int] = None
+    frame: Optional[str] = None
+    holder_id: Optional[int] = None
 
     def __post_init__(self):
         segs = tuple(self.segments)

@@ -152,7 +152,7 @@ def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult
                 raise _error(sid, f"malformed {kind} path segment: {err}") from None
             T, t = T_end, t_end
         role = ""
-        link = None
+        link = frame = None
         if holder is not None:
             if "prescribed_path" in holder.types:
                 role = "prescribed"
@@ -161,10 +161,16 @@ def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult
             for rel in pop.usedin(holder.id):
                 if "link_motion_relationship" in rel.types:
                     link = _link_name(pop, _ref(rel.get("rep_1")))
+                    # the link frame that follows the path: the operator's first item
+                    op = _ref(rel.get("transformation_operator"))
+                    item = _ref(pop.instance(op).get("transform_item_1")) if op in pop else None
+                    if item in pop:
+                        frame = pop.instance(item).get("name") or f"#{item}"
                     break
         name = inst.get("name") or (holder.get("name") if holder is not None else "") or f"#{pid}"
         try:
-            out.paths.append(KinematicPath(name, segments, link=link, role=role, id=pid))
+            out.paths.append(KinematicPath(name, segments, link=link, frame=frame, role=role, id=pid,
+                                           holder_id=holder.id if holder is not None else None))
         except PathError as err:
             raise _error(pid, str(err)) from None
     return out
