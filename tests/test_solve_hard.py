@@ -18,17 +18,9 @@ from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.placements import (compose, rot_x, rot_y, rot_z, trans_x, trans_y,
                                            transform, ypr_from_matrix, ypr_rotation)
-from test_solve import REFERENCE, _dh_product, dh_mechanism, four_bar, link_angles, wrap
+from test_solve import _dh_product, dh_mechanism, four_bar, link_angles, ref, wrap  # noqa: F401 - ref is a fixture
 
 I4 = np.eye(4)
-
-
-@pytest.fixture(scope="module")
-def ref():
-    if not REFERENCE.exists():
-        pytest.skip("shared reference data not available")
-    import json
-    return json.loads(REFERENCE.read_text())
 
 
 def circles(P, rp, Q, rq, side):

@@ -31,8 +31,7 @@ No click, no numpy.
 
 from __future__ import annotations
 
-from p105cli.step import JsonDocument
-from p105cli.step.reader import DataSection
+from p105cli.step.jsonmodel import extended
 
 __all__ = ["EnrichError", "enrich"]
 
@@ -136,13 +135,4 @@ def enrich(doc, analysed, profile: str):
                 loops.append(_ref(new("kinematic_loop", [f"loop {li}", edges])))
             new("kinematic_topology_network_structure", [f"{mech.name} loops", loops, context, _ref(top["id"])])
 
-    sections = list(doc.sections)
-    if sections:
-        last = sections[-1]
-        sections[-1] = DataSection(last.parameters, last.count + len(added))
-    else:
-        sections = [DataSection(None, len(added))]
-    out = JsonDocument(header=doc.header, sections=sections, data=data + added,
-                       other_sections=list(getattr(doc, "other_sections", []) or []),
-                       source=getattr(doc, "source", "<input>"))
-    return out, notes
+    return extended(doc, data, added), notes

@@ -304,8 +304,7 @@ def add_results(doc, mech, Q, t, status):
     ``kinematic_analysis_result`` of the mechanism. Values are in the file's
     units; only configurations that could be assembled are written.
     Returns ``(document, notes)``."""
-    from p105cli.step import DataSection
-    from p105cli.step.jsonmodel import JsonDocument
+    from p105cli.step.jsonmodel import extended
 
     layout = "ap242" if mech.profile == "ap242" else "1996"
     lf, af = mech.units.length, mech.units.angle
@@ -382,16 +381,7 @@ def add_results(doc, mech, Q, t, status):
     elif states:
         notes.append("one configuration: written as a state without an interpolated sequence "
                      "(a sequence needs two)")
-    sections = list(doc.sections)
-    if sections:
-        last = sections[-1]
-        sections[-1] = DataSection(last.parameters, last.count + len(added))
-    else:
-        sections = [DataSection(None, len(added))]
-    out = JsonDocument(header=doc.header, sections=sections, data=data + added,
-                       other_sections=list(getattr(doc, "other_sections", []) or []),
-                       source=getattr(doc, "source", "<input>"))
-    return out, notes
+    return extended(doc, data, added), notes
 
 
 def _parameter_context(by_id, ctx_ref, name, added, new_id):

@@ -62,6 +62,21 @@ class JsonDocument:
         return len(self.data)
 
 
+def extended(doc, data: list, added: list) -> JsonDocument:
+    """A new document: ``doc``'s header and other sections, the records ``data``
+    (``doc``'s own, as read) followed by ``added``, which join the last DATA
+    section (or a new one)."""
+    sections = list(doc.sections)
+    if sections:
+        last = sections[-1]
+        sections[-1] = DataSection(last.parameters, last.count + len(added))
+    else:
+        sections = [DataSection(None, len(added))]
+    return JsonDocument(header=doc.header, sections=sections, data=data + added,
+                        other_sections=list(getattr(doc, "other_sections", []) or []),
+                        source=getattr(doc, "source", "<input>"))
+
+
 # ---------------------------------------------------------------- writing
 
 def _frame(doc) -> dict:
