@@ -49,7 +49,8 @@ demo: $(STAMP)
 	$(P105) solve examples/four_bar_ap242.stp --values examples/four_bar_crank.csv --angle-unit deg \
 	  | $(P105) validate --pass -o build/four_bar_solved.report \
 	  | $(P105) interpolate --what configurations --count 73 --to csv -o build/four_bar_configurations.csv
-	$(P105) solve --scene examples/cable_scene.json --keypoints examples/cable_keypoints.jsonl -o build/cable.jsonl
+	$(P105) solve --scene examples/cable_scene.json --keypoints examples/cable_keypoints.jsonl -o build/cable.jsonl \
+	  --plot build/cable_shapes.svg
 	$(P105) validate -f sarif -o build/corpus.sarif tests/data/corpus/*_ap214.stp tests/data/corpus/*_ap242.stp
 	$(P105) validate --schema p105 tests/data/corpus/*_p105.stp
 	@echo "demo: every step passed; outputs in build/"

@@ -301,6 +301,8 @@ PAGES: dict[str, dict] = {
             "status is 1 when any configuration is not ok.",
         ],
         "examples": [
+            ("Route a cable along a moving end and draw its shapes:",
+             ["p105 solve --scene cable_scene.json --keypoints cable_keypoints.jsonl --plot shapes.svg > cable.jsonl"]),
             ("Run the motion program the file carries (its kinematic_control), 50 samples:",
              ["p105 solve four_bar_ap214.stp --program --count 50 --to csv"]),
             ("Turn the crank of a four-bar through the angles of a CSV file (degrees):",

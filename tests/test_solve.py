@@ -662,3 +662,57 @@ def test_program_sampled_and_refused_without_a_program(tmp_path):
     bare.write_text("\n".join(line for line in f.read_text().splitlines() if "KINEMATIC_CONTROL" not in line))
     r = run_cli("solve", bare, "--program")
     assert r.returncode == 2 and b"no kinematic_control" in r.stderr
+
+
+def test_a_scene_block_in_the_json_model_runs_like_scene(tmp_path, cli):
+    """The JSON model may carry its scene ("scene" block): solve runs it as --scene would,
+    export to JSON keeps it, and Part 21 (which cannot hold it) says it is left out."""
+    pose = [[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 0, 1]]
+    scene = {"format": "p105-scene/1", "units": {"length": "mm", "force": "N", "mass": "kg", "pressure": "MPa"},
+             "gravity": [0, -9810, 0],
+             "cables": [{"name": "c1", "length": 80, "density": 1.5e-6,
+                         "section": {"radius": 1, "youngs_modulus": 200, "poisson_ratio": 0.4},
+                         "start": {"link": "frame", "condition": "clamped", "pose": pose},
+                         "end": {"link": "coupler", "condition": "clamped", "pose": pose},
+                         "numerics": {"model": "rod", "segments": 20, "tol": 1e-10},
+                         "effects": ["shape", "overlength"]}]}
+    model = json.loads(cli("parse", FOUR_BAR_STP).stdout)
+    model["scene"] = scene
+    mpath = tmp_path / "model.json"
+    mpath.write_text(json.dumps(model))
+    spath = tmp_path / "scene.json"
+    spath.write_text(json.dumps(scene))
+    embedded = cli("solve", mpath, "--sweep", "A=0:1.5:4", "--no-timings")
+    separate = cli("solve", FOUR_BAR_STP, "--sweep", "A=0:1.5:4", "--scene", spath, "--no-timings")
+    assert embedded.returncode == 0 and separate.returncode == 0, embedded.stderr + separate.stderr
+
+    def steady(out):  # the cable records carry their run time; everything else must agree
+        recs = _records(out)
+        for r in recs:
+            r.pop("time_s", None)
+        return recs
+    assert steady(embedded.stdout) == steady(separate.stdout)
+    assert any(r["type"] == "cable_state" for r in _records(embedded.stdout))
+    kept = cli("export", "--to", "json", mpath)
+    assert json.loads(kept.stdout)["scene"] == scene
+    import jsonschema
+    schema_path = ROOT / "p105cli" / "schemas" / "p105-1.schema.json"
+    jsonschema.validate(json.loads(kept.stdout), json.loads(schema_path.read_text()))
+    p21 = cli("export", "--to", "p21", mpath)
+    assert p21.returncode == 0 and b"scene block" in p21.stderr and b"left out" in p21.stderr
+
+
+def test_scene_pictures_from_the_cli(tmp_path, cli):
+    """--plot/--animate draw the cable states the run wrote (matplotlib: the plot extra)."""
+    pytest.importorskip("matplotlib")
+    svg, html = tmp_path / "shapes.svg", tmp_path / "path.html"
+    r = cli("solve", "--scene", EXAMPLES / "cable_scene.json", "--keypoints", EXAMPLES / "cable_keypoints.jsonl",
+            "--plot", svg, "--animate", html)
+    assert r.returncode == 0, r.stderr
+    assert svg.read_text().lstrip().startswith(("<?xml", "<svg")) and "</svg>" in svg.read_text()
+    states = [x for x in _records(r.stdout) if x["type"] == "cable_state"]
+    assert len(states) == 9
+    assert html.read_text().count("<html") == 1 and html.stat().st_size > 10_000
+    bad = cli("solve", "--scene", EXAMPLES / "cable_scene.json", "--keypoints", EXAMPLES / "cable_keypoints.jsonl",
+              "--plot", tmp_path / "shapes.jpg")
+    assert bad.returncode == 2 and b".png or .svg" in bad.stderr

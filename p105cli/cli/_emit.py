@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .contract import Progress
+from .contract import Progress, diag
 
 
 class _Counted:
@@ -30,5 +30,9 @@ def emit_json(doc, out, stream: bool) -> None:
 
 def emit_p21(doc, out) -> None:
     from p105cli.step import write_step
+    if getattr(doc, "scene", None) is not None:
+        # Part 21 has no place for it: say so rather than lose it silently
+        diag("warning", f"{doc.source}: the model's scene block (p105-scene/1) is not Part 21 data and is "
+                        "left out; keep the model as JSON (--to json) or save the scene to a file for --scene")
     with Progress(len(doc), "writing Part 21") as progress:
         write_step(_Counted(doc, progress), out)

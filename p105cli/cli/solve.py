@@ -84,12 +84,17 @@ def _key_label(key) -> str:
               help="A scene (JSON or TOML) of effects to simulate on the solved motion (cables).")
 @click.option("--keypoints", metavar="FILE", default=None,
               help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
+@click.option("--plot", "plot", metavar="FILE", default=None,
+              help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; "
+                   "needs matplotlib: pip install 'p105cli[plot]').")
+@click.option("--animate", "animation", metavar="FILE", default=None,
+              help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html).")
 @click.option("--timings/--no-timings", default=True, show_default=True,
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
 @output_option
 def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, tol, max_iter, to,
-          angle_unit, length_unit, mechanism_name, schema, scene, keypoints, timings, output):
+          angle_unit, length_unit, mechanism_name, schema, scene, keypoints, plot, animation, timings, output):
     """Position analysis of a mechanism (Part 21 or p105/1 JSON, sniffed) along a motion.
 
     Forward: the pairs named in --values/--set are driven (without them, the
@@ -100,9 +105,13 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
     that configuration (status), never silently. Inverse: --path with
     --target-link. Exit 1 when any configuration is not ok.
     """
+    to_given = to is not None
     to = to or ("jsonl" if scene is not None else "model")
     if scene is not None and to != "jsonl":
         raise click.UsageError("--scene writes JSON Lines (--to jsonl)")
+    for name, target in (("--plot", plot), ("--animate", animation)):
+        if target is not None and model is None and scene is None:
+            raise click.UsageError(f"{name} draws a scene's cables: it needs --scene (or a model with a scene)")
     if not (tol > 0.0 and math.isfinite(tol)):
         raise click.UsageError("--tol must be a positive number")
     if path is not None and target_link is None:
@@ -137,11 +146,19 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
         report_warnings(doc)
         from p105cli.kinematics.reader import read_mechanism
         mech = read_mechanism(doc, schema, mechanism_name)
+        if scene_dict is None and getattr(doc, "scene", None) is not None:
+            # the model carries its scene (a JSON model's "scene" block): run it as --scene would
+            if not to_given:
+                to = "jsonl"
+            if to == "jsonl":
+                scene_dict, scene = doc.scene, model if model not in (None, "-") else "."
+            else:
+                diag("note", f"{doc.source}: the model's scene is run with --to jsonl only")
     if mech is None:
         if values is not None or sets or sweeps or path is not None:
             raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
         with open_output(output, (scene, keypoints)) as out:
-            ok = _run_scene(scene_dict, scene, keypoints, None, out)
+            ok = _run_scene(scene_dict, scene, keypoints, None, out, (plot, animation))
         if not ok:
             raise click.exceptions.Exit(ExitCode.FINDINGS)
         return
@@ -207,7 +224,8 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
             offset += n
         if to == "jsonl":
             out.write(json.dumps(tally.summary(mech, lf, af, timings), separators=(",", ":")) + "\n")
-            if scene_dict is not None and not _run_scene(scene_dict, scene, keypoints, motion, out):
+            if scene_dict is not None and not _run_scene(scene_dict, scene, keypoints, motion, out,
+                                                         (plot, animation)):
                 tally.failed = True
     tally.report()
     if tally.failed:
@@ -511,23 +529,39 @@ def _load_scene(path):
         raise InputError(f"{path}: {err}") from None
 
 
-def _run_scene(scene_dict, scene_path, keypoints, motion, out) -> bool:
-    """Run the scene's effects on the motion; its records as JSON Lines. False on findings."""
+def _run_scene(scene_dict, scene_path, keypoints, motion, out, pictures=(None, None)) -> bool:
+    """Run the scene's effects on the motion; its records as JSON Lines (and the pictures
+    asked for). False on findings."""
     from p105cli.cable.scene import scene_has_cables
     if not scene_has_cables(scene_dict):
+        if any(pictures):
+            diag("warning", f"{scene_path}: the scene has no cables: nothing to draw")
         return True
     from p105cli.cable import workflow  # only a scene with cables pays for the rod solvers
     base_dir = os.path.dirname(os.path.abspath(scene_path))
     ok = True
     if keypoints is not None:
         keypoints = os.path.abspath(keypoints)  # the scene resolves relative names from its own directory
+    kept = [] if any(pictures) else None
     try:
         for rec in workflow.run_scene(scene_dict, keypoints=keypoints, motion=motion, base_dir=base_dir):
             if rec.get("type") == "summary" and rec.get("exit_code", 0):
                 ok = False
+            if kept is not None and rec.get("type") == "cable_state":
+                kept.append(rec)
             out.write(json.dumps(rec, separators=(",", ":"), default=_json_default) + "\n")
     except ValueError as err:
         raise InputError(f"{scene_path}: {err}") from None
+    if kept is not None:
+        from p105cli.cable import display  # matplotlib only when a picture is asked for
+        plot, animation = pictures
+        try:
+            if plot is not None:
+                display.plot_shapes(kept, plot)
+            if animation is not None:
+                display.animate(kept, animation)
+        except display.DisplayError as err:
+            raise InputError(str(err)) from None
     return ok
 
 

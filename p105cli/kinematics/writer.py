@@ -171,7 +171,8 @@ def write_mechanism(mech, profile: str, *, source=None, occt_compat: bool = Fals
                 diags.append("the SIGNATURE section is left out: it signs the source's bytes, not the converted file")
                 continue
             other.append({**sec, "after_data": min(int(sec.get("after_data", 1)), 1)})
-    return JsonDocument(header, [DataSection(None, len(data))], data, other, name), diags
+    scene = getattr(source, "scene", None) if source is not None else None
+    return JsonDocument(header, [DataSection(None, len(data))], data, other, name, scene), diags
 
 
 # ------------------------------------------------------------------ id allocation

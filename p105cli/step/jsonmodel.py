@@ -54,6 +54,8 @@ class JsonDocument:
     data: list[dict]
     other_sections: list[dict] = field(default_factory=list)
     source: str = "<input>"
+    #: A p105-scene/1 block (gravity, cables, effects) carried with the model; not Part 21 data.
+    scene: dict | None = None
 
     def records(self):
         return iter(self.data)
@@ -74,7 +76,7 @@ def extended(doc, data: list, added: list) -> JsonDocument:
         sections = [DataSection(None, len(added))]
     return JsonDocument(header=doc.header, sections=sections, data=data + added,
                         other_sections=list(getattr(doc, "other_sections", []) or []),
-                        source=getattr(doc, "source", "<input>"))
+                        source=getattr(doc, "source", "<input>"), scene=getattr(doc, "scene", None))
 
 
 # ---------------------------------------------------------------- writing
@@ -87,6 +89,9 @@ def _frame(doc) -> dict:
         frame["data_sections"] = [{"parameters": s.parameters, "count": s.count} for s in sections]
     if doc.other_sections:
         frame["other_sections"] = list(doc.other_sections)
+    scene = getattr(doc, "scene", None)
+    if scene is not None:
+        frame["scene"] = scene
     return frame
 
 
@@ -276,7 +281,7 @@ def _check_header(header, where: str = "/header") -> dict:
     return header
 
 
-def _check_frame(frame: dict, count: int) -> tuple[dict, list[DataSection], list[dict]]:
+def _check_frame(frame: dict, count: int) -> tuple[dict, list[DataSection], list[dict], dict | None]:
     if frame.get("format") != FORMAT:
         raise ModelError(f"not a {FORMAT} model (format is {frame.get('format')!r})", "/format")
     header = _check_header(frame.get("header", {}))
@@ -308,11 +313,14 @@ def _check_frame(frame: dict, count: int) -> tuple[dict, list[DataSection], list
         if not 0 <= s["after_data"] <= len(sections):
             raise ModelError(f"after_data must be between 0 and {len(sections)}", f"/other_sections/{i}")
         check_value(s["text"], f"/other_sections/{i}/text")
-    known = {"format", "stream", "header", "data", "data_sections", "other_sections"}
+    scene = frame.get("scene")
+    if scene is not None and type(scene) is not dict:
+        raise ModelError("scene must be an object (a p105-scene/1 block)", "/scene")
+    known = {"format", "stream", "header", "data", "data_sections", "other_sections", "scene"}
     extra = set(frame) - known
     if extra:
         raise ModelError(f"unknown top-level key {sorted(extra)[0]!r}", "/")
-    return header, sections, other
+    return header, sections, other, scene
 
 
 def _check_ids(data: list[dict]) -> None:
@@ -369,6 +377,6 @@ def _read_json(text: str, source: str) -> JsonDocument:
             raise ModelError("data must be a list of instance records", "/data")
         for i, record in enumerate(data):
             check_record(record, f"/data/{i}")
-    header, sections, other = _check_frame(frame, len(data))
+    header, sections, other, scene = _check_frame(frame, len(data))
     _check_ids(data)
-    return JsonDocument(header, sections, data, other, source)
+    return JsonDocument(header, sections, data, other, source, scene)
