@@ -65,6 +65,10 @@ def _key_label(key) -> str:
               help="With --program: N evenly spaced samples of the program (default: its nodes).")
 @click.option("--step", type=float, default=None, metavar="DT",
               help="With --program: a sample every DT of the program's parameter, nodes included.")
+@click.option("--resulting-path", "resulting_paths", metavar="LINK[:FRAME]", multiple=True,
+              help="With --to model: write the path of LINK's frame (or its named FRAME) through the solved "
+                   "configurations as a Part 105 resulting path (repeatable). Default: the target link's frame "
+                   "of an inverse analysis.")
 @click.option("--tol", type=float, default=1e-10, show_default=True,
               help="Loop residual / pose error: lengths relative to the model size, rotations in radians.")
 @click.option("--max-iter", type=click.IntRange(1, 10_000), default=30, show_default=True,
@@ -93,8 +97,9 @@ def _key_label(key) -> str:
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
 @output_option
-def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, tol, max_iter, to,
-          angle_unit, length_unit, mechanism_name, schema, scene, keypoints, plot, animation, timings, output):
+def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, resulting_paths,
+          tol, max_iter, to, angle_unit, length_unit, mechanism_name, schema, scene, keypoints, plot, animation,
+          timings, output):
     """Position analysis of a mechanism (Part 21 or p105/1 JSON, sniffed) along a motion.
 
     Forward: the pairs named in --values/--set are driven (without them, the
@@ -112,6 +117,9 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
     for name, target in (("--plot", plot), ("--animate", animation)):
         if target is not None and model is None and scene is None:
             raise click.UsageError(f"{name} draws a scene's cables: it needs --scene (or a model with a scene)")
+    if resulting_paths and to != "model":
+        # the tables carry every link's placement already; the path entities are model output
+        diag("note", f"--resulting-path is written with --to model only; the {to} output has the link placements")
     if not (tol > 0.0 and math.isfinite(tol)):
         raise click.UsageError("--tol must be a positive number")
     if path is not None and target_link is None:
@@ -165,10 +173,11 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
 
     from p105cli.kinematics import solver
     prog = _program(doc, mech, schema, count, step) if program else None
+    frame = None  # the target frame of an inverse analysis (link coordinates), None: the link frame
     try:
         pl = solver.plan(mech)
         if prog is not None and prog[0] == "path":
-            _, t, poses, target_link, frame = prog
+            _, t, poses, target_link, frame, target_frame = prog
             blocks = iter([solver.solve_path(mech, target_link, poses, frame=frame, tol=tol,
                                              max_iter=4 * max_iter, pl=pl)])
         elif prog is not None:
@@ -200,6 +209,8 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
         raise InputError(f"{model if model not in (None, '-') else '<stdin>'}: {err}") from None
 
     inverse = path is not None or (prog is not None and prog[0] == "path")
+    requests = _resulting_paths(mech, pl, resulting_paths, inverse, target_link, target_frame, frame) \
+        if to == "model" else []
     tally = _Tally(inverse)
     motion = [] if scene_dict is not None else None
     with open_output(output, (model, values, path, scene, keypoints)) as out:
@@ -216,7 +227,7 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
             elif to == "csv":
                 _write_csv(out, mech, result, links, tb, offset, lf, af, inverse)
             else:
-                _write_model(out, mech, result, doc, tb)
+                _write_model(out, mech, result, doc, tb, requests)
             if motion is not None:
                 motion += [(float(tb[i]) if tb is not None else float(offset + i),
                             {name: links[i, pl.link_index[name]] for name in mech.link_names})
@@ -390,7 +401,7 @@ def _program(doc, mech, schema, count, step):
             poses = sample_path(path, t).T
         except PathError as err:
             raise InputError(f"{source}: #{path.id}: {err}") from None
-        return "path", t, poses, path.link, frame
+        return "path", t, poses, path.link, frame, path.frame
 
 
 def _driven(mech, values, sets, sweeps, lf, af):
@@ -500,12 +511,27 @@ def _write_csv(out, mech, result, links, t, offset, lf, af, inverse):
         w.writerow(row)
 
 
-def _write_model(out, mech, result, doc, t):
+def _resulting_paths(mech, pl, specs, inverse, target_link, target_frame, frame):
+    """The link frames whose resulting paths go into the model: --resulting-path, else the
+    target of an inverse analysis."""
+    from p105cli.kinematics.motion_io import MotionInputError, resulting_path_request
+    try:
+        if specs:
+            return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
+        if inverse:
+            spec = target_link if target_frame is None or frame is None else f"{target_link}:{target_frame}"
+            return [resulting_path_request(mech, pl, spec, frame_matrix=frame)]
+    except MotionInputError as err:
+        raise InputError(str(err)) from None
+    return []
+
+
+def _write_model(out, mech, result, doc, t, paths=()):
     """The input model plus the analysis results, in the input's format (Part 21 or JSON)."""
     from p105cli.kinematics.motion_io import add_results
     from ._emit import emit_json, emit_p21
     try:
-        new, notes = add_results(doc, mech, result.Q, t, result.status)
+        new, notes = add_results(doc, mech, result.Q, t, result.status, paths=paths, pl=result.plan)
     except ValueError as err:
         raise InputError(f"{doc.source}: {err}") from None
     if hasattr(doc, "text"):
