@@ -716,3 +716,23 @@ def test_scene_pictures_from_the_cli(tmp_path, cli):
     bad = cli("solve", "--scene", EXAMPLES / "cable_scene.json", "--keypoints", EXAMPLES / "cable_keypoints.jsonl",
               "--plot", tmp_path / "shapes.jpg")
     assert bad.returncode == 2 and b".png or .svg" in bad.stderr
+
+
+def test_value_tables_parse_the_same_fast_and_careful():
+    """Plain numeric tables go through numpy's C parser; anything unusual through the careful
+    one. Both must give the same bits, and errors still name LINE:COL."""
+    from p105cli.kinematics import motion_io
+
+    rng = np.random.default_rng(7)
+    q = rng.normal(size=(200, 3)) * np.array([1e-300, 1.0, 1e200])
+    body = "".join(f"{i},{a!r},{b:.17g},{c!r}\n" for i, (a, b, c) in enumerate(q.tolist()))
+    text = "# a comment\nt,A,B[0],B[1]\n" + body
+    fast_t, fast = motion_io.read_values(text, "x.csv")
+    careful_t, careful = motion_io.read_values(text.replace("\n0,", '\n"0",', 1), "x.csv")  # quotes: careful
+    assert np.array_equal(fast_t, careful_t)
+    for k in fast:
+        assert np.array_equal(fast[k], careful[k])
+    bad = text.split("\n")
+    bad[4] = "2,nan?," + bad[4].split(",", 2)[2]
+    with pytest.raises(motion_io.MotionInputError, match=r"x\.csv:5:3: 'nan\?' is not a number"):
+        motion_io.read_values("\n".join(bad), "x.csv")

@@ -491,24 +491,33 @@ def _csv_header(out, mech, pl, inverse):
 
 
 def _write_csv(out, mech, result, links, t, offset, lf, af, inverse):
-    import csv
+    """One block of rows. The numbers of the block are gathered into one array (values in
+    the output units, errors, link poses) and formatted by C loops (``tolist``, ``map(repr)``):
+    per-value Python made 100 000 configurations of a 6R arm take 20 s of formatting."""
+    import numpy as np
+    from p105cli.kinematics.solver import angle_value_mask
+
     pl = result.plan
     slices = mech.value_slices
-    w = csv.writer(out, lineterminator="\n")
-    for i in range(result.Q.shape[0]):
-        row = [offset + i, "" if t is None else repr(_f(t[i])), result.status[i]]
-        for p in mech.pairs:
-            v = _value_out(mech, p, result.Q[i, slices[p.name]], lf, af)
-            row += [repr(x) for x in (v if isinstance(v, list) else [v])]
-        if inverse:
-            row += [repr(_f(result.position_error[i] / lf)), repr(_f(result.rotation_error[i]))]
-        else:
-            row += [repr(_f(result.residual[i]))]
-        row += [int(result.iterations[i])]
-        for name in mech.link_names:
-            M = _pose_out(links[i, pl.link_index[name]], lf)
-            row += [repr(M[r][c]) for r in range(3) for c in range(4)]
-        w.writerow(row)
+    n = result.Q.shape[0]
+    cols = []
+    for p in mech.pairs:
+        scale = np.array([af if a else lf for a in angle_value_mask(p)])
+        cols.append(result.Q[:, slices[p.name]] / scale)
+    if inverse:
+        cols.append(np.column_stack([result.position_error / lf, result.rotation_error]))
+    else:
+        cols.append(np.asarray(result.residual, dtype=np.float64)[:, None])
+    left = np.hstack(cols) + 0.0   # + 0.0: no "-0.0" in the output
+    poses = links[:, [pl.link_index[name] for name in mech.link_names], :3, :].copy()
+    poses[..., 3] /= lf
+    right = poses.reshape(n, -1) + 0.0
+    index = range(offset, offset + n)
+    tt = [""] * n if t is None else [repr(x) for x in (np.asarray(t, dtype=np.float64) + 0.0).tolist()]
+    iters = np.asarray(result.iterations).tolist()
+    write = out.write
+    for i, ti, st, a, it, b in zip(index, tt, result.status, left.tolist(), iters, right.tolist()):
+        write(f"{i},{ti},{st},{','.join(map(repr, a))},{it},{','.join(map(repr, b))}\n")
 
 
 def _resulting_paths(mech, pl, specs, inverse, target_link, target_frame, frame):

@@ -72,6 +72,34 @@ def _csv_rows(text: str):
     return out
 
 
+def _fast_table(text: str):
+    """``(values (N, k), end of the header line)`` of a plain numeric CSV table read by
+    numpy's C parser, or None when anything is unusual (quotes, comments after the header,
+    a cell that is not a finite number, ragged rows): then the careful parser runs and
+    names the LINE:COL at fault. Both parse numbers with correct rounding."""
+    pos = 0
+    while True:  # the header: the first line that is neither blank nor a comment
+        end = text.find("\n", pos)
+        line = text[pos:] if end < 0 else text[pos:end]
+        if line.strip() and not line.lstrip().startswith("#"):
+            break
+        if end < 0:
+            return None
+        pos = end + 1
+    if end < 0:
+        return None
+    body = text[end + 1:]
+    if '"' in body or "#" in body or not body.strip():
+        return None
+    try:
+        arr = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, dtype=np.float64)
+    except ValueError:
+        return None
+    if arr.size == 0 or not np.all(np.isfinite(arr)):
+        return None
+    return arr, end + 1
+
+
 def read_values(text: str, source: str, *, length=1.0, angle=1.0, is_angle=None):
     """Driven values from CSV or JSON Lines text.
 
@@ -82,7 +110,8 @@ def read_values(text: str, source: str, *, length=1.0, angle=1.0, is_angle=None)
     """
     if text.lstrip().startswith("{"):
         return _values_jsonl(text, source, length=length, angle=angle, is_angle=is_angle)
-    rows = _csv_rows(text)
+    arr = _fast_table(text)
+    rows = _csv_rows(text if arr is None else text[:arr[1]])
     if not rows:
         raise MotionInputError(f"{source}:1:1: no header line (expected the driven pair names)")
     hline, header = rows[0]
@@ -102,14 +131,18 @@ def read_values(text: str, source: str, *, length=1.0, angle=1.0, is_angle=None)
         keys.append(key)
     if all(k is None for k in keys):
         raise MotionInputError(f"{source}:{hline}:1: no pair column in the header")
-    data = []
-    for line, cells in rows[1:]:
-        if len(cells) != len(keys):
-            raise MotionInputError(f"{source}:{line}:1: {len(cells)} fields, the header has {len(keys)}")
-        data.append([_number(cell, f"{source}:{line}:{col}") for col, cell in cells])
-    if not data:
-        raise MotionInputError(f"{source}:{hline + 1}:1: no configuration after the header")
-    arr = np.array(data, dtype=np.float64)
+    if arr is not None and arr[0].shape[1] == len(keys):
+        arr = arr[0]
+    else:  # the careful path: every cell checked, errors at LINE:COL
+        rows = rows if arr is None else _csv_rows(text)
+        data = []
+        for line, cells in rows[1:]:
+            if len(cells) != len(keys):
+                raise MotionInputError(f"{source}:{line}:1: {len(cells)} fields, the header has {len(keys)}")
+            data.append([_number(cell, f"{source}:{line}:{col}") for col, cell in cells])
+        if not data:
+            raise MotionInputError(f"{source}:{hline + 1}:1: no configuration after the header")
+        arr = np.array(data, dtype=np.float64)
     t = arr[:, tcol] if tcol is not None else None
     cols = {}
     for i, key in enumerate(keys):
