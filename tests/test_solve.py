@@ -468,18 +468,22 @@ def test_cli_inverse_analysis_with_a_jsonl_path(ref, tmp_path, cli):
     assert recs[-1]["max_position_error"] < 1e-11
 
 
-def test_cli_scene_cable_rides_on_the_solved_links(tmp_path, cli):
-    # A cable from the ground link's origin (pivot A) to the coupler's origin (pin B): their distance
-    # is the crank length (20 mm) in every configuration, so the slack is 1 - 20/80 throughout.
+def _four_bar_cable_scene():
+    """A cable from the ground link's origin (pivot A) to the coupler's origin (pin B): their
+    distance is the crank length (20 mm) in every configuration, so the slack is 1 - 20/80."""
     pose = [[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 0, 1]]
-    scene = {"format": "p105-scene/1", "units": {"length": "mm", "force": "N", "mass": "kg", "pressure": "MPa"},
-             "gravity": [0, -9810, 0],
-             "cables": [{"name": "c1", "length": 80, "density": 1.5e-6,
-                         "section": {"radius": 1, "youngs_modulus": 200, "poisson_ratio": 0.4},
-                         "start": {"link": "frame", "condition": "clamped", "pose": pose},
-                         "end": {"link": "coupler", "condition": "clamped", "pose": pose},
-                         "numerics": {"model": "rod", "segments": 20, "tol": 1e-10},
-                         "effects": ["shape", "overlength"]}]}
+    return {"format": "p105-scene/1", "units": {"length": "mm", "force": "N", "mass": "kg", "pressure": "MPa"},
+            "gravity": [0, -9810, 0],
+            "cables": [{"name": "c1", "length": 80, "density": 1.5e-6,
+                        "section": {"radius": 1, "youngs_modulus": 200, "poisson_ratio": 0.4},
+                        "start": {"link": "frame", "condition": "clamped", "pose": pose},
+                        "end": {"link": "coupler", "condition": "clamped", "pose": pose},
+                        "numerics": {"model": "rod", "segments": 20, "tol": 1e-10},
+                        "effects": ["shape", "overlength"]}]}
+
+
+def test_cli_scene_cable_rides_on_the_solved_links(tmp_path, cli):
+    scene = _four_bar_cable_scene()
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(scene))
     r = cli("solve", FOUR_BAR_STP, "--sweep", "A=0:1.5:4", "--scene", path, "--to", "jsonl")
@@ -667,15 +671,7 @@ def test_program_sampled_and_refused_without_a_program(tmp_path):
 def test_a_scene_block_in_the_json_model_runs_like_scene(tmp_path, cli):
     """The JSON model may carry its scene ("scene" block): solve runs it as --scene would,
     export to JSON keeps it, and Part 21 (which cannot hold it) says it is left out."""
-    pose = [[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 0, 1]]
-    scene = {"format": "p105-scene/1", "units": {"length": "mm", "force": "N", "mass": "kg", "pressure": "MPa"},
-             "gravity": [0, -9810, 0],
-             "cables": [{"name": "c1", "length": 80, "density": 1.5e-6,
-                         "section": {"radius": 1, "youngs_modulus": 200, "poisson_ratio": 0.4},
-                         "start": {"link": "frame", "condition": "clamped", "pose": pose},
-                         "end": {"link": "coupler", "condition": "clamped", "pose": pose},
-                         "numerics": {"model": "rod", "segments": 20, "tol": 1e-10},
-                         "effects": ["shape", "overlength"]}]}
+    scene = _four_bar_cable_scene()
     model = json.loads(cli("parse", FOUR_BAR_STP).stdout)
     model["scene"] = scene
     mpath = tmp_path / "model.json"

@@ -153,15 +153,20 @@ def read_values(text: str, source: str, *, length=1.0, angle=1.0, is_angle=None)
     return t, cols
 
 
-def _values_jsonl(text, source, *, length, angle, is_angle):
-    ts, recs = [], []
+def _jsonl_records(text, source):
+    """(line number, record) of the non-blank lines of a JSON Lines text; errors at LINE:COL."""
     for n, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         try:
-            rec = json.loads(line)
+            yield n, json.loads(line)
         except json.JSONDecodeError as err:
             raise MotionInputError(f"{source}:{n}:{err.colno}: {err.msg}") from None
+
+
+def _values_jsonl(text, source, *, length, angle, is_angle):
+    ts, recs = [], []
+    for n, rec in _jsonl_records(text, source):
         if not isinstance(rec, dict) or not isinstance(rec.get("pairs"), dict):
             raise MotionInputError(f"{source}:{n}:1: expected {{\"t\": ..., \"pairs\": {{name: value}}}}")
         ts.append(rec.get("t"))
@@ -245,13 +250,7 @@ def read_poses(text: str, source: str, *, length=1.0):
     """Target poses from JSON Lines or CSV: ``(t (N,) or None, poses (N, 4, 4))`` in metres."""
     if text.lstrip().startswith("{"):
         ts, poses = [], []
-        for n, line in enumerate(text.splitlines(), 1):
-            if not line.strip():
-                continue
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError as err:
-                raise MotionInputError(f"{source}:{n}:{err.colno}: {err.msg}") from None
+        for n, rec in _jsonl_records(text, source):
             T = rec.get("pose") if isinstance(rec, dict) else None
             try:
                 T = np.array(T, dtype=np.float64)
