@@ -220,3 +220,15 @@ def test_module_and_console_script_agree():
     r = subprocess.run([sys.executable, "-c", "import sys; from p105cli.cli import main; sys.exit(main())",
                         "parse", str(EXAMPLE)], capture_output=True, cwd=ROOT)
     assert r.returncode == 0 and r.stdout == run_cli("parse", EXAMPLE).stdout
+
+
+@pytest.mark.parametrize("args", [["validate"], ["graph"], ["solve"], ["interpolate"], ["export", "--schema", "ap242"],
+                                  ["convert-dh-su", "--convention", "standard", "--to", "dh"]])
+def test_unknown_file_schema_is_exit_2_naming_the_file(args, tmp_path):
+    """Commands that interpret a model need its schema: an unknown one is the input's fault."""
+    f = tmp_path / "other.stp"
+    f.write_text(p21("#1=CARTESIAN_POINT('',(0.,0.,0.));", HEADER.replace("TEST_SCHEMA", "CONFIG_CONTROL_DESIGN")))
+    r = run_cli(*args, f)
+    assert r.returncode == ExitCode.USAGE, r.stderr
+    said = r.stderr + (r.stdout if args[0] == "validate" else b"")  # validate's report is its data
+    assert b"other.stp" in said and b"CONFIG_CONTROL_DESIGN" in said and b"Traceback" not in r.stderr

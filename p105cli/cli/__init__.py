@@ -127,6 +127,10 @@ def main(argv: list[str] | None = None) -> int:
         diag("error", "out of memory (try --stream for very large files)")
         return ExitCode.INTERNAL
     except Exception as err:  # noqa: BLE001 - the last line of defence of the contract
+        from p105cli.schema.profiles import UnknownSchemaError
+        if isinstance(err, UnknownSchemaError):  # the input's FILE_SCHEMA: the user's file, not a bug
+            diag("error", str(err))
+            return ExitCode.USAGE
         diag("error", f"internal error (a bug in p105, please report it): {type(err).__name__}: {err}")
         if Settings.verbosity > 0:
             import traceback

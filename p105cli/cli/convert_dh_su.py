@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, read_input_bytes
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, naming_source, open_output, read_input_bytes
 from .options import input_argument, output_option
 
 SCHEMAS = ["ap242", "p105", "ap214"]
@@ -49,7 +49,8 @@ def _model_to_table(text: str, source: str, convention, name):
         raise click.UsageError(f"{source} is a DH table; --to dh/dh-json reads a model (Part 21 or "
                                "p105/1 JSON)")
     doc = read_any(text, source)
-    mech = read_mechanism(doc, name=name)
+    with naming_source(doc):
+        mech = read_mechanism(doc, name=name)
     try:
         return dh.from_mechanism(mech, convention)
     except dh.DHConversionError as err:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, load_document, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, InputError, diag, load_document, naming_source, open_output, report_warnings
 from .options import input_argument, output_option, stream_option
 from ._emit import emit_json, emit_p21
 
@@ -14,7 +14,8 @@ def _convert(doc, schema: str, occt_compat: bool):
     from p105cli.kinematics.reader import read_mechanisms
     from p105cli.kinematics.writer import write_mechanism
 
-    mechanisms = read_mechanisms(doc)
+    with naming_source(doc):
+        mechanisms = read_mechanisms(doc)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")

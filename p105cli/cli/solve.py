@@ -153,7 +153,8 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
         doc = load_document(model)
         report_warnings(doc)
         from p105cli.kinematics.reader import read_mechanism
-        mech = read_mechanism(doc, schema, mechanism_name)
+        with naming_source(doc):
+            mech = read_mechanism(doc, schema, mechanism_name)
         if scene_dict is None and getattr(doc, "scene", None) is not None:
             # the model carries its scene (a JSON model's "scene" block): run it as --scene would
             if not to_given:
