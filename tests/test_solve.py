@@ -732,3 +732,12 @@ def test_value_tables_parse_the_same_fast_and_careful():
     bad[4] = "2,nan?," + bad[4].split(",", 2)[2]
     with pytest.raises(motion_io.MotionInputError, match=r"x\.csv:5:3: 'nan\?' is not a number"):
         motion_io.read_values("\n".join(bad), "x.csv")
+
+
+def test_requests_beyond_double_precision_or_memory_are_usage_errors(cli):
+    r = cli("solve", FOUR_BAR_STP, "--set", "A=1e20", "--to", "jsonl")
+    assert r.returncode == 2 and b"more than 1e+06 turns" in r.stderr and r.stdout == b""
+    r = cli("solve", FOUR_BAR_STP, "--program", "--step", "1e-12", "--to", "jsonl")
+    assert r.returncode == 2 and b"more than 10 million samples" in r.stderr and b"Traceback" not in r.stderr
+    r = cli("interpolate", "--what", "paths", "--step", "1e-12", FOUR_BAR_STP)
+    assert r.returncode == 2 and b"more than 10 million samples" in r.stderr and b"Traceback" not in r.stderr

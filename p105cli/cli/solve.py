@@ -19,6 +19,9 @@ from .options import output_option
 
 FORMATS = ["model", "jsonl", "csv"]
 
+#: Driven angles beyond this many turns are refused (double precision keeps ~1e-9 rad there).
+MAX_TURNS = 1e6
+
 
 def _f(x) -> float:
     """A plain float for JSON (no -0.0 noise from round-off, no numpy types)."""
@@ -344,12 +347,21 @@ def _program(doc, mech, schema, count, step):
     """The model's motion program, sampled: ``("values", t, driven)`` for a configuration
     sequence (the actuated pairs, else every pair it values), ``("path", t, poses,
     link, frame)`` for a prescribed path."""
+    from p105cli.motion.sampling import SamplingError
+
+    source = getattr(doc, "source", None) or "<stdin>"
+    try:
+        return _program_of(doc, mech, schema, count, step, source)
+    except SamplingError as err:
+        raise InputError(f"{source}: {err}") from None
+
+
+def _program_of(doc, mech, schema, count, step, source):
     from p105cli.kinematics.reader import population
     from p105cli.motion.configurations import sample_configurations
     from p105cli.motion.paths import PathError, sample_path
     from p105cli.motion.sampling import Plan
 
-    source = getattr(doc, "source", None) or "<stdin>"
     with naming_source(doc):
         pop, _ = population(doc, schema)
         programs = []
@@ -425,6 +437,10 @@ def _driven(mech, values, sets, sweeps, lf, af):
         cols[key] = np.full(n, v)
     driven = {}
     for key, v in cols.items():
+        # an angle of a million turns has no digits left for its position within the turn
+        if is_angle(key) and np.size(v) and float(np.max(np.abs(v))) > MAX_TURNS * 2.0 * math.pi:
+            raise InputError(f"{_key_label(key)}: an angle of {float(np.max(np.abs(v))):.3g} rad is more than "
+                             f"{MAX_TURNS:.0e} turns: its position within a turn is lost to rounding")
         if not isinstance(key, tuple) and mech.pair(key).value_count > 1:
             raise InputError(f"pair {key!r} has {mech.pair(key).value_count} values: name them "
                              f"{key}[0], {key}[1], ...")

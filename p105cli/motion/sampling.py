@@ -37,8 +37,11 @@ class Plan:
             return np.union1d(t, breakpoints) if self.nodes else t
         if self.step is None and self.count is None:
             return np.asarray(breakpoints, dtype=np.float64)
-        return parameter_grid(t_start, t_end, step=self.step, count=self.count,
-                              breakpoints=breakpoints if self.nodes else None)
+        try:
+            return parameter_grid(t_start, t_end, step=self.step, count=self.count,
+                                  breakpoints=breakpoints if self.nodes else None)
+        except ValueError as err:  # a grid too fine to hold: the request, not a bug
+            raise SamplingError(str(err)) from None
 
 
 def _clean(x: float) -> float:
