@@ -76,6 +76,10 @@ def _key_label(key) -> str:
               help="Loop residual / pose error: lengths relative to the model size, rotations in radians.")
 @click.option("--max-iter", type=click.IntRange(1, 10_000), default=30, show_default=True,
               help="Newton iterations per configuration (inverse analysis: x4).")
+@click.option("--branch", "branch", type=click.Choice(["initial", "+", "-"]), default="initial", show_default=True,
+              help="Closed loops: the assembly branch to track. initial: the initial state's; + / -: the "
+                   "assembly whose branch invariant has that sign (+ is the initial state's, - the other "
+                   "one, found at the initial state's driven values).")
 @click.option("--to", "to", type=click.Choice(FORMATS), default=None,
               help="Output: the model with the analysis results added (default; in the input's format), "
                    "JSON Lines records (default with --scene), or a flat CSV table.")
@@ -101,7 +105,7 @@ def _key_label(key) -> str:
                    "--no-timings gives byte-reproducible output.")
 @output_option
 def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, resulting_paths,
-          tol, max_iter, to, angle_unit, length_unit, mechanism_name, schema, scene, keypoints, plot, animation,
+          tol, max_iter, branch, to, angle_unit, length_unit, mechanism_name, schema, scene, keypoints, plot, animation,
           timings, output):
     """Position analysis of a mechanism (Part 21 or p105/1 JSON, sniffed) along a motion.
 
@@ -140,6 +144,10 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
         raise click.UsageError("give at most one of --count and --step")
     if step is not None and not (step > 0.0 and math.isfinite(step)):
         raise click.UsageError("--step must be a positive number")
+    want = {"initial": None, "+": 1, "-": -1}[branch]
+    if want is not None and (path is not None or (model is None and scene is not None)):
+        raise click.UsageError(f"--branch {branch}: the assembly branch is chosen in forward analysis of a model "
+                               "with closed loops" + (" (not with --path)" if path is not None else ""))
     if model is None and scene is None:
         model = "-"
     stdin_users = [n for n, v in (("MODEL", model), ("--values", values), ("--path", path)) if v == "-"]
@@ -180,6 +188,9 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
     frame = None  # the target frame of an inverse analysis (link coordinates), None: the link frame
     try:
         pl = solver.plan(mech)
+        if want is not None and prog is not None and prog[0] == "path":
+            raise click.UsageError(f"--branch {branch}: the model's program is a prescribed path (inverse "
+                                   "analysis): the assembly branch is chosen in forward analysis")
         if prog is not None and prog[0] == "path":
             _, t, poses, target_link, frame, target_frame = prog
             blocks = iter([solver.solve_path(mech, target_link, poses, frame=frame, tol=tol,
@@ -187,7 +198,7 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
         elif prog is not None:
             _, t, driven = prog
             blocks = solver.iter_motion(mech, driven, tol=tol, max_iter=max_iter, pl=pl,
-                                        block=None if to == "model" else 4096)
+                                        block=None if to == "model" else 4096, branch=want)
         elif path is not None:
             from p105cli.kinematics.motion_io import read_poses
             text, source = _read_text(path, "the path")
@@ -205,10 +216,12 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
             t, driven = _driven(mech, values, sets, sweeps, lf, af)
             # Model output needs every configuration at once; the tables stream block by block.
             blocks = solver.iter_motion(mech, driven, tol=tol, max_iter=max_iter, pl=pl,
-                                        block=None if to == "model" else 4096)
+                                        block=None if to == "model" else 4096, branch=want)
         first = next(blocks)
     except MotionInputError as err:
         raise InputError(str(err)) from None
+    except solver.BranchUndefined as err:
+        raise click.UsageError(f"--branch {branch}: mechanism {mech.name!r}: {err}") from None
     except solver.SolveError as err:
         raise InputError(f"{model if model not in (None, '-') else '<stdin>'}: {err}") from None
 
@@ -220,6 +233,7 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
     with open_output(output, (model, values, path, scene, keypoints)) as out:
         if to == "csv":
             _csv_header(out, mech, pl, inverse)
+        branched = bool(pl.loops) and not inverse   # the branch invariant exists: forward, with loops
         offset = 0
         for result in _chain(first, blocks):
             links = result.links()
@@ -227,9 +241,9 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
             tb = t[offset:offset + n] if t is not None else None
             tally.add(result, offset)
             if to == "jsonl":
-                _write_jsonl(out, mech, result, links, tb, offset, lf, af, inverse)
+                _write_jsonl(out, mech, result, links, tb, offset, lf, af, inverse, branched)
             elif to == "csv":
-                _write_csv(out, mech, result, links, tb, offset, lf, af, inverse)
+                _write_csv(out, mech, result, links, tb, offset, lf, af, inverse, branched)
             else:
                 _write_model(out, mech, result, doc, tb, requests)
             if motion is not None:
@@ -474,12 +488,14 @@ def _pose_out(T, lf):
     return [[_f(x) for x in row] for row in M]
 
 
-def _write_jsonl(out, mech, result, links, t, offset, lf, af, inverse):
+def _write_jsonl(out, mech, result, links, t, offset, lf, af, inverse, branched=False):
     pl = result.plan
     slices = mech.value_slices
     for i in range(result.Q.shape[0]):
         rec = {"type": "configuration", "index": offset + i, "t": _f(t[i]) if t is not None else None,
                "status": result.status[i]}
+        if branched:
+            rec["branch"] = int(result.branch[i])
         rec["pairs"] = {p.name: _value_out(mech, p, result.Q[i, slices[p.name]], lf, af) for p in mech.pairs}
         rec["links"] = {name: _pose_out(links[i, pl.link_index[name]], lf) for name in mech.link_names}
         if inverse:
@@ -496,7 +512,7 @@ def _write_jsonl(out, mech, result, links, t, offset, lf, af, inverse):
 
 
 def _csv_header(out, mech, pl, inverse):
-    head = ["index", "t", "status"]
+    head = ["index", "t", "status"] + (["branch"] if pl.loops and not inverse else [])
     for p in mech.pairs:
         head += [p.name] if p.value_count == 1 else [f"{p.name}[{j}]" for j in range(p.value_count)]
     head += ["position_error", "rotation_error"] if inverse else ["residual"]
@@ -507,7 +523,7 @@ def _csv_header(out, mech, pl, inverse):
     csv.writer(out, lineterminator="\n").writerow(head)
 
 
-def _write_csv(out, mech, result, links, t, offset, lf, af, inverse):
+def _write_csv(out, mech, result, links, t, offset, lf, af, inverse, branched=False):
     """One block of rows. The numbers of the block are gathered into one array (values in
     the output units, errors, link poses) and formatted by C loops (``tolist``, ``map(repr)``):
     per-value Python made 100 000 configurations of a 6R arm take 20 s of formatting."""
@@ -532,8 +548,12 @@ def _write_csv(out, mech, result, links, t, offset, lf, af, inverse):
     index = range(offset, offset + n)
     tt = [""] * n if t is None else [repr(x) for x in (np.asarray(t, dtype=np.float64) + 0.0).tolist()]
     iters = np.asarray(result.iterations).tolist()
+    if branched:   # the column after status
+        status = [f"{s},{b}" for s, b in zip(result.status, np.asarray(result.branch).astype(int).tolist())]
+    else:
+        status = result.status
     write = out.write
-    for i, ti, st, a, it, b in zip(index, tt, result.status, left.tolist(), iters, right.tolist()):
+    for i, ti, st, a, it, b in zip(index, tt, status, left.tolist(), iters, right.tolist()):
         write(f"{i},{ti},{st},{','.join(map(repr, a))},{it},{','.join(map(repr, b))}\n")
 
 

@@ -52,7 +52,11 @@ passive Jacobian rank-deficient: a dead centre; or a bifurcation passed
 between two samples), ``branch_change`` (only the other branch could be
 reached: the new branch is tracked from then on), ``not_assemblable``
 (the least-squares residual stalls above the tolerance: reported with
-it), ``not_converged``.
+it), ``not_converged``. The invariant is +1 at the initial assembly (the
+bases are its singular vectors); ``branch=-1`` starts instead from another
+assembly at the same driven values with invariant -1 (in those bases),
+found by a deterministic multi-start Levenberg-Marquardt
+(:func:`_other_assembly`).
 
 Inverse analysis (:func:`solve_path`)
 -------------------------------------
@@ -76,7 +80,7 @@ from .pairs import adjoint
 from .placements import inverse
 
 __all__ = ["Plan", "plan", "forward", "MotionResult", "solve_motion", "PathResult", "solve_path",
-           "angle_value_mask", "STATUSES", "SolveError"]
+           "angle_value_mask", "STATUSES", "SolveError", "BranchUndefined"]
 
 #: Status of a configuration, from best to worst (records and the summary use these words).
 STATUSES = ("ok", "out_of_range", "singular", "branch_change", "not_converged", "not_assemblable")
@@ -93,6 +97,11 @@ class SolveError(ValueError):
 
 
 # --------------------------------------------------------------------------- structure
+
+class BranchUndefined(SolveError):
+    """A branch was asked for (``branch=+1/-1``) where the invariant is not defined: no loop
+    unknowns, the passive values not fixed by the loops, or a singular initial state."""
+
 
 @dataclass
 class Plan:
@@ -858,23 +867,32 @@ def _driven_columns(pl: Plan, driven: dict):
 
 
 def solve_motion(mech, driven: dict, *, initial=None, tol: float = 1e-10, max_iter: int = 30,
-                 pl: Plan | None = None) -> MotionResult:
+                 pl: Plan | None = None, branch: int | None = None) -> MotionResult:
     """Forward position analysis along a sequence of driven values.
 
     ``driven`` maps pair names to arrays (N,) or (N, k) of values in SI (a
     ``(name, j)`` key drives value j of a multi-valued pair only). Pairs not
     driven keep their initial-state values unless they lie on a loop, whose
     closure fixes them. ``tol`` is the loop residual relative to the model
-    size (lengths) and in radians (rotations)."""
-    blocks = list(iter_motion(mech, driven, initial=initial, tol=tol, max_iter=max_iter, pl=pl, block=None))
+    size (lengths) and in radians (rotations). ``branch`` (+1 / -1, None: the initial
+    state's) chooses the assembly to track: see :func:`iter_motion`."""
+    blocks = list(iter_motion(mech, driven, initial=initial, tol=tol, max_iter=max_iter, pl=pl, block=None,
+                              branch=branch))
     return blocks[0]
 
 
 def iter_motion(mech, driven: dict, *, initial=None, tol: float = 1e-10, max_iter: int = 30,
-                pl: Plan | None = None, block: int | None = 4096):
+                pl: Plan | None = None, block: int | None = 4096, branch: int | None = None):
     """:func:`solve_motion` in consecutive blocks of ``block`` configurations (all at once when
     None): one :class:`MotionResult` per block, the continuation (values, branch) carried
-    from block to block, so a long sequence streams in bounded memory."""
+    from block to block, so a long sequence streams in bounded memory.
+
+    ``branch``: None tracks the assembly of the initial state (its invariant is +1 by
+    construction: the bases are anchored there). +1 asks for that same assembly, -1 for the
+    other one at the initial state's driven values (:func:`_other_assembly`); either raises
+    :class:`BranchUndefined` where the invariant is not defined."""
+    if branch not in (None, 1, -1):
+        raise ValueError("branch must be None, +1 or -1")
     pl = pl or plan(mech)
     q0 = mech.initial_vector() if initial is None else np.asarray(initial, dtype=np.float64).copy()
     d, D = _driven_columns(pl, driven)
@@ -884,6 +902,10 @@ def iter_motion(mech, driven: dict, *, initial=None, tol: float = 1e-10, max_ite
     u = np.array([i for i in loopv if i not in dset], dtype=int)
     sc = _scale(pl)
     prob = _Loops(pl, u, d, sc[u], sc[d], tol, max_iter)
+    prob.want = branch
+    if branch is not None and (len(u) == 0 or not pl.loops):
+        raise BranchUndefined("the mechanism has no closed loop" if not pl.loops else
+                              "every value of its loops is driven: no assembly to choose")
     state = None
     step = N if not block else block
     for start in range(0, N, step):
@@ -921,6 +943,9 @@ def _continuation(prob: _Loops, q0, Q, D, status, messages, iters, branch, state
     from ``state`` (where a previous block ended). Returns the state to continue from."""
     if state is not None:
         return _follow(prob, state, Q, D, status, messages, iters, branch)
+    if getattr(prob, "missing", None):   # a later block: the requested branch was not found before
+        status[:], messages[:] = ["not_assemblable"] * Q.shape[0], [prob.missing] * Q.shape[0]
+        return None
     # Assemble the initial state: driven values as the initial state gives them.
     qa = q0[None, :].copy()
     conv, res, it, Ju, stalled = prob.newton(qa, max_iter=200, damped=True)
@@ -936,8 +961,71 @@ def _continuation(prob: _Loops, q0, Q, D, status, messages, iters, branch, state
     prob.rank = rank
     prob.U0, prob.V0 = U[:, :rank], Vt[:rank].T
     sign = prob.sign(Ju)[0]
+    want = getattr(prob, "want", None)
+    if want is not None:
+        if rank < len(prob.u) or prob.conditioning(Ju)[0] <= prob.singular_below:
+            raise BranchUndefined(
+                "the assembly branch is not defined at the initial state: "
+                + ("the loops leave the passive values free (the passive Jacobian has rank "
+                   f"{rank} < {len(prob.u)})" if rank < len(prob.u) else
+                   "it is a singular configuration (dead centre)"))
+        if want != sign:
+            other = _other_assembly(prob, qa[0])
+            if other is None:
+                msg = (f"the requested assembly branch ({'+' if want > 0 else '-'}) was not found at the "
+                       "initial state: no other assembly closes the loops there")
+                for b in range(Q.shape[0]):
+                    status[b], messages[b] = "not_assemblable", msg
+                prob.missing = msg
+                return None
+            qa[0], Ju, Jd = other
+            sign = prob.reanchor(Ju)
+            prob.last_Jd = Jd
     state = {"q": qa[0], "sign": sign, "J": (Ju[:1], prob.last_Jd[:1]), "K": _K0}
     return _follow(prob, state, Q, D, status, messages, iters, branch)
+
+
+#: Fixed seed and count of the random starts of :func:`_other_assembly` (same input, same answer).
+_BRANCH_SEED = 105
+_BRANCH_STARTS = 256
+
+
+def _other_assembly(prob: _Loops, q0):
+    """Another assembly of the loops at q0's driven values whose invariant (with the bases of
+    the initial state) has the requested sign ``prob.want``: a deterministic multi-start
+    Levenberg-Marquardt. Starts, in order: the passive angles reflected (-q: the mirror
+    assembly of a planar loop about its ground line) and turned by pi; q pushed along each
+    right singular vector of J_u; then a fixed-seed random set. The first start (in that order)
+    that closes the loops to the tolerance, regular and with the requested sign, is taken.
+    Returns (q, J_u (1, ., .), J_d (1, ., .)) or None."""
+    u = prob.u
+    ang = prob.pl.angle_mask[u]
+    qu = q0[u]
+    starts = [np.where(ang, -qu, qu), np.where(ang, qu + math.pi, qu), np.where(ang, math.pi - qu, qu)]
+    _, _, Vt = np.linalg.svd(prob.evaluate(q0[None])[1][0])
+    for vec in Vt:
+        for eps in (0.5, 1.5, 3.0):
+            for sgn in (1.0, -1.0):
+                starts.append(qu + sgn * eps * vec / prob.scale_u)
+    rng = np.random.default_rng(_BRANCH_SEED)
+    # Random passive values: angles anywhere on the circle, lengths within a model size of q0's.
+    R = rng.uniform(-1.0, 1.0, size=(_BRANCH_STARTS, len(u)))
+    starts += list(np.where(ang, math.pi * R, qu + R / prob.scale_u))
+    Qs = np.tile(q0, (len(starts), 1))
+    Qs[:, u] = np.array(starts)
+    conv = prob.newton(Qs, max_iter=200, damped=True)[0]
+    if conv.any():
+        # a closing Newton polish to round-off (the continuation starts from here)
+        c = np.flatnonzero(conv)
+        Qc = Qs[c]
+        conv_c, _, _, Ju_c, _ = prob.newton(Qc, max_iter=5)
+        Jd_c = prob.last_Jd
+        sg, cond = prob.sign(Ju_c), prob.conditioning(Ju_c)
+        good = conv_c & (sg == prob.want) & (cond > prob.singular_below)
+        if good.any():
+            k = int(np.argmax(good))
+            return Qc[k], Ju_c[k:k + 1], Jd_c[k:k + 1]
+    return None
 
 
 def _follow(prob, state, Q, D, status, messages, iters, branch):
