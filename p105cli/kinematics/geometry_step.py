@@ -32,6 +32,7 @@ from typing import Callable
 import numpy as np
 
 from ..step.errors import ModelError
+from ..step.values import ref_id
 from . import geometry as G
 from .placements import axis2_placement_3d
 
@@ -45,10 +46,7 @@ SURFACE_TYPES = ("plane", "cylindrical_surface", "conical_surface", "spherical_s
 
 # --------------------------------------------------------------------------- reading
 
-def _ref(v):
-    if isinstance(v, dict) and "ref" in v:
-        return v["ref"]
-    return None
+_ref = ref_id
 
 
 def _num(v, inst, attr) -> float:

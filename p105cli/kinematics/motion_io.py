@@ -26,6 +26,8 @@ import re
 
 import numpy as np
 
+from p105cli.step.values import ref_id
+
 __all__ = ["MotionInputError", "read_values", "read_poses", "parse_set", "parse_sweep", "LENGTH_UNITS", "ANGLE_UNITS",
            "add_results", "ResultingPath", "resulting_path_request", "controlling_pairs"]
 
@@ -537,8 +539,7 @@ def _length_of_context(pop, ctx_id, default: float) -> float:
     return f or default
 
 
-def _ref_id(v):
-    return v.get("ref") if isinstance(v, dict) else None
+_ref_id = ref_id
 
 
 def _link_representation(pop, mech, link) -> int:

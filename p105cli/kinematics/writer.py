@@ -68,7 +68,7 @@ import numpy as np
 from p105cli.corpus.builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from p105cli.corpus.mechanisms import Z_TO_X
 from p105cli.corpus.writers import _APPLICATION, PROFILES as _CORPUS_PROFILES
-from p105cli.step.values import record_refs as _rec_refs
+from p105cli.step.values import record_refs as _rec_refs, ref_id
 
 from .placements import compose, inverse
 
@@ -998,8 +998,7 @@ def _args(rec, etype=None) -> list:
     return rec["args"]
 
 
-def _ref_of(v):
-    return v["ref"] if isinstance(v, dict) and "ref" in v and len(v) == 1 else None
+_ref_of = ref_id
 
 
 _LINK_REP_TYPES = frozenset(("kinematic_link_representation", "rigid_link_representation",

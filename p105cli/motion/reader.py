@@ -25,6 +25,7 @@ from typing import Optional
 import numpy as np
 
 from p105cli.step.errors import ModelError
+from p105cli.step.values import ref_id
 from .paths import KinematicPath, PathError, PathSegment
 
 __all__ = ["read_paths", "read_configuration_sequences", "MotionReadResult"]
@@ -45,10 +46,7 @@ class MotionReadResult:
         self.skipped: list = []
 
 
-def _ref(v) -> Optional[int]:
-    if isinstance(v, dict) and "ref" in v:
-        return v["ref"]
-    return None
+_ref = ref_id
 
 
 def _num(v) -> float:

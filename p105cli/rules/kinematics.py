@@ -132,7 +132,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
-from ..step.values import refs_in as _refs_in
+from ..step.values import ref_id, refs_in as _refs_in
 from .conformance import ERROR, WARNING, Finding
 
 __all__ = ["RULES", "KIN_ENTITIES", "ContextUnits", "check_kinematics", "context_units"]
@@ -268,12 +268,7 @@ _MISSING = object()
 
 # --------------------------------------------------------------------------- raw values
 
-def _ref(v) -> Optional[int]:
-    if type(v) is dict:
-        r = v.get("ref")
-        if type(r) is int:
-            return r
-    return None
+_ref = ref_id  # the model's one reading of a reference value (step/values.py)
 
 
 def _untyped(v):

@@ -3,6 +3,16 @@
 from __future__ import annotations
 
 
+def ref_id(value):
+    """The instance id of a reference value ``{"ref": n}``, else None (one rule for every
+    reader of the model: entity references are the only dicts with an int "ref")."""
+    if type(value) is dict:
+        r = value.get("ref")
+        if type(r) is int:
+            return r
+    return None
+
+
 def refs_in(value, out: list | None = None) -> list:
     """Append every referenced instance id in ``value`` to ``out``, in written order.
 
