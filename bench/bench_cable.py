@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from p105cli.cable.helix import helix_frames  # noqa: E402
 from p105cli.cable.patent import solve_patent  # noqa: E402
 from p105cli.cable.rod import RodProblem, solve_rod  # noqa: E402
 from p105cli.fileio import atomic_file, write_text_atomically  # noqa: E402
@@ -57,15 +58,9 @@ HELIX = {"A": 1.0, "B": 1.0, "C": 0.7692307692307692, "R": 0.1, "alpha_rad": 1.2
 
 
 def helix(s):
-    R, al, om = HELIX["R"], HELIX["alpha_rad"], HELIX["omega"]
-    tau = np.sin(al) * np.cos(al) / R
-    phi = s * np.sin(al) / R
-    r = np.stack([R * np.cos(phi), R * np.sin(phi), s * np.cos(al)], -1)
-    t = np.stack([-np.sin(al) * np.sin(phi), np.sin(al) * np.cos(phi), np.full_like(s, np.cos(al))], -1)
-    N = np.stack([-np.cos(phi), -np.sin(phi), 0 * s], -1)
-    B = np.cross(t, N)
-    psi = ((om - tau) * s)[:, None]
-    return r, np.stack([np.cos(psi) * N + np.sin(psi) * B, -np.sin(psi) * N + np.cos(psi) * B, t], -1)
+    """(positions, rotations) of the exact helix (p105cli.cable.helix)."""
+    F = helix_frames(s, HELIX["R"], HELIX["alpha_rad"], HELIX["omega"])
+    return F[:, :3, 3], F[:, :3, :3]
 
 
 def _helix_problem():

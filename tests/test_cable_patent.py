@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import SHARED
+from p105cli.cable.helix import helix_frames as kirchhoff_helix
 from p105cli.cable.patent import solve_patent
 from p105cli.cable.rod import RodProblem, solve_rod
 from p105cli.kinematics.placements import matrix_to_quaternion, quaternion_to_matrix
@@ -135,16 +136,9 @@ def test_clamped_clamped_elastica_first_mode():
 
 
 def helix_frames(s, inp):
-    R, al, om = inp["R"], inp["alpha_rad"], inp["omega"]
-    tau = np.sin(al) * np.cos(al) / R
-    phi = s * np.sin(al) / R
-    r = np.stack([R * np.cos(phi), R * np.sin(phi), s * np.cos(al)], -1)
-    t = np.stack([-np.sin(al) * np.sin(phi), np.sin(al) * np.cos(phi), np.full_like(s, np.cos(al))], -1)
-    N = np.stack([-np.cos(phi), -np.sin(phi), 0 * s], -1)
-    B = np.cross(t, N)
-    psi = ((om - tau) * s)[:, None]
-    d1, d2 = np.cos(psi) * N + np.sin(psi) * B, -np.sin(psi) * N + np.cos(psi) * B
-    return r, np.stack([d1, d2, t], -1)
+    """(positions, rotations) of the exact helix (p105cli.cable.helix)."""
+    F = kirchhoff_helix(s, inp["R"], inp["alpha_rad"], inp["omega"])
+    return F[:, :3, 3], F[:, :3, :3]
 
 
 def test_helix_3d_with_warm_start():

@@ -17,6 +17,7 @@ import pytest
 from conftest import SHARED
 from p105cli.cable import rod as rodmod
 from p105cli.cable.catenary import catenary, catenary_parameter
+from p105cli.cable.helix import helix_frames as kirchhoff_helix
 from p105cli.cable.rod import RodProblem, solve_rod, state_from_frames
 from p105cli.kinematics.placements import quaternion_to_matrix, rot_x, rot_y, rot_z
 
@@ -231,21 +232,11 @@ def test_clamped_clamped_elastica():
 # --------------------------------------------------------------------------- 3D helix
 
 def helix_frames(s):
+    """The case's frames (p105cli.cable.helix) and binormals t x N (N: towards the axis)."""
     c = CASES["e1_helix_clamped"]["inputs"]
-    R, al, om = c["R"], c["alpha_rad"], c["omega"]
-    sa, ca = np.sin(al), np.cos(al)
-    tau = sa * ca / R
-    phi = s * sa / R
-    t = np.stack([-sa * np.sin(phi), sa * np.cos(phi), ca + 0 * phi], 1)
-    N = np.stack([-np.cos(phi), -np.sin(phi), 0 * phi], 1)
-    B = np.cross(t, N)
-    psi = (om - tau) * s
-    F = np.tile(np.eye(4), (len(s), 1, 1))
-    F[:, :3, 0] = np.cos(psi)[:, None] * N + np.sin(psi)[:, None] * B
-    F[:, :3, 1] = -np.sin(psi)[:, None] * N + np.cos(psi)[:, None] * B
-    F[:, :3, 2] = t
-    F[:, :3, 3] = np.stack([R * np.cos(phi), R * np.sin(phi), ca * s], 1)
-    return F, B
+    F = kirchhoff_helix(s, c["R"], c["alpha_rad"], c["omega"])
+    N = -F[:, :3, 3] * [1.0, 1.0, 0.0] / c["R"]
+    return F, np.cross(F[:, :3, 2], N)
 
 
 def test_helix_end_reactions():

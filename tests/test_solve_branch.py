@@ -17,12 +17,11 @@ import pytest
 import test_solve
 from conftest import ROOT
 from test_solve import REFERENCE, _records, _reference_four_bar, four_bar, link_angles, wrap
-from test_solve_hard import four_bar_closed_form, sigma_of
+from test_solve_hard import four_bar_closed_form, offset_slider_crank, sigma_of
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import compose, rot_x, rot_y, rot_z, trans_x, trans_y
+from p105cli.kinematics.placements import compose, rot_x, rot_y, rot_z
 
-I4 = np.eye(4)
 UR5 = ROOT / "tests" / "data" / "corpus" / "ur5_arm_ap242.stp"
 OTHER = {"open": "crossed", "crossed": "open"}
 cli = test_solve.cli   # the in-process CLI fixture
@@ -93,27 +92,9 @@ def test_cli_branch_field_is_constant_along_a_grashof_crank_sweep(fb, tmp_path, 
     assert len(rows) == 74
 
 
-def _slider_crank(sigma):
-    r, l, e = 0.03, 0.11, 0.015
-    slide = rot_y(math.pi / 2)                                   # pair z axis along world x
-    links = [Link(n) for n in ("frame", "crank", "rod", "slider")]
-    pairs = [Pair("O", "revolute", "frame", "crank", I4, I4, actuated=True),
-             Pair("A", "revolute", "crank", "rod", trans_x(r), I4),
-             Pair("B", "revolute", "rod", "slider", trans_x(l), I4),
-             Pair("S", "prismatic", "frame", "slider", compose(trans_y(e), slide), slide)]
-    th0 = 0.3
-    x0 = r * math.cos(th0) + sigma * math.sqrt(l * l - (e - r * math.sin(th0)) ** 2)
-    phi = math.atan2(e - r * math.sin(th0), x0 - r * math.cos(th0))
-    init = {"O": (th0,), "A": (phi - th0 + 0.03,), "B": (-phi,), "S": (x0 + 0.002,)}
-
-    def x_of(th, s):
-        return r * math.cos(th) + s * math.sqrt(l * l - (e - r * math.sin(th)) ** 2)
-    return Mechanism("slider_crank", links, pairs, "frame", initial=init), x_of, th0
-
-
 @pytest.mark.parametrize("sigma", [+1, -1])
 def test_offset_slider_crank_both_ways(sigma):
-    mech, x_of, th0 = _slider_crank(sigma)
+    mech, x_of, th0 = offset_slider_crank(sigma)
     seq = th0 + np.linspace(0.0, 2 * math.pi, 61)
     for sign, s in ((None, sigma), (1, sigma), (-1, -sigma)):
         result = solver.solve_motion(mech, {"O": seq}, tol=1e-13, branch=sign)

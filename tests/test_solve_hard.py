@@ -135,9 +135,15 @@ def test_same_model_in_millimetres_and_metres_gives_the_same_answers_scaled():
 
 # ---------------------------------------------------------------- slider-crank
 
-@pytest.mark.parametrize("sigma", [+1, -1])
-def test_offset_slider_crank_both_branches(sigma):
-    r, l, e = 0.03, 0.11, 0.015
+SLIDER_OFFSET = 0.015
+
+
+def offset_slider_crank(sigma):
+    """An offset slider-crank (crank 30 mm, rod 110 mm, offset 15 mm) assembled on branch
+    ``sigma`` (the slider ahead of the crank pin: +1, behind: -1), the initial state a little
+    off so it must be closed; with ``x_of(theta, sigma)``, the closed-form slider position,
+    and the initial crank angle."""
+    r, l, e = 0.03, 0.11, SLIDER_OFFSET
     slide = rot_y(math.pi / 2)                                              # pair z axis along world x
     links = [Link(n) for n in ("frame", "crank", "rod", "slider")]
     pairs = [Pair("O", "revolute", "frame", "crank", I4, I4, actuated=True),
@@ -145,20 +151,25 @@ def test_offset_slider_crank_both_branches(sigma):
              Pair("B", "revolute", "rod", "slider", trans_x(l), I4),
              Pair("S", "prismatic", "frame", "slider", compose(trans_y(e), slide), slide)]
 
-    def x_of(th):
-        return r * math.cos(th) + sigma * math.sqrt(l * l - (e - r * math.sin(th)) ** 2)
+    def x_of(th, s):
+        return r * math.cos(th) + s * math.sqrt(l * l - (e - r * math.sin(th)) ** 2)
 
     th0 = 0.3
-    x0 = x_of(th0)
-    Apos = np.array([r * math.cos(th0), r * math.sin(th0)])
-    phi = math.atan2(e - Apos[1], x0 - Apos[0])
+    x0 = x_of(th0, sigma)
+    phi = math.atan2(e - r * math.sin(th0), x0 - r * math.cos(th0))
     init = {"O": (th0,), "A": (phi - th0 + 0.03,), "B": (-phi,), "S": (x0 + 0.002,)}
-    mech = Mechanism("slider_crank", links, pairs, "frame", initial=init)
+    return Mechanism("slider_crank", links, pairs, "frame", initial=init), x_of, th0
+
+
+@pytest.mark.parametrize("sigma", [+1, -1])
+def test_offset_slider_crank_both_branches(sigma):
+    mech, x_of, th0 = offset_slider_crank(sigma)
+    e = SLIDER_OFFSET
     seq = th0 + np.linspace(0.0, 2 * math.pi, 61)
     result = solver.solve_motion(mech, {"O": seq}, tol=1e-13)
     assert result.status == ["ok"] * len(seq)
     s = result.Q[:, 3]
-    want = np.array([x_of(t) for t in seq])
+    want = np.array([x_of(t, sigma) for t in seq])
     assert np.abs(s - want).max() < 1e-13 * 10
     slider = result.links()[:, result.plan.link_index["slider"]]
     assert np.abs(slider[:, 0, 3] - want).max() < 1e-12 and np.abs(slider[:, 1, 3] - e).max() < 1e-12
