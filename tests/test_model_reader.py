@@ -685,7 +685,7 @@ def _t(x, y, z):
 def _hand_built_1996() -> tuple:
     """A 1996-layout chain base -spherical- l1 -screw- l2 -universal- l3 -cylindrical- l4, mm and
     degrees, with su_parameters frames on the spherical pair (p105 profile)."""
-    from p105cli.corpus.builder import Builder, enum, typed
+    from p105cli.part105.builder import Builder, enum, typed
     b = Builder()
     b.units(cbu_dimensions_explicit=False)
     ctx = b.context("links")

@@ -31,7 +31,7 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-from .builder import DERIVED, FALSE, TRUE, Builder, boolean, enum, typed
+from p105cli.part105.builder import DERIVED, FALSE, TRUE, Builder, boolean, enum, typed
 from .mechanisms import MECHANISMS, Mechanism, configuration
 from .writers import PROFILES, TIME_STAMP, header, records
 

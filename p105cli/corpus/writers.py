@@ -67,32 +67,16 @@ import math
 
 import numpy as np
 
-from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
+from p105cli.part105.catalogue import APPLICATION as _APPLICATION
+from p105cli.part105.catalogue import PROFILES, SCHEMA_AP214, SCHEMA_AP242  # noqa: F401 (re-exported)
+
+from p105cli.part105.builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from .geometry import compose, su_parameters, ypr_angles
 from .mechanisms import Mechanism, configuration, pair_frames, resolved_limits, scalar_value
-
-SCHEMA_AP214 = "AUTOMOTIVE_DESIGN { 1 0 10303 214 3 1 1 }"
-SCHEMA_AP242 = "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }"
-
-PROFILES = {
-    "ap214": {"layout": "1996", "su": False, "schema": SCHEMA_AP214, "cbu_dimensions_explicit": False,
-              "slide_axis": 2, "label": "Part 105:1996 layout, AP214 (AUTOMOTIVE_DESIGN)"},
-    "p105": {"layout": "1996", "su": True, "schema": SCHEMA_AP214, "cbu_dimensions_explicit": False,
-             "slide_axis": 2, "label": "Part 105:1996 layout with su_parameters (p105 profile)"},
-    "ap242": {"layout": "ap242", "su": True, "schema": SCHEMA_AP242, "cbu_dimensions_explicit": True,
-              "slide_axis": 0, "label": "AP242 layout (ISO 10303-442)"},
-}
 
 #: Fixed so that regenerating the corpus gives the same bytes.
 TIME_STAMP = "2026-01-01T00:00:00"
 
-#: Application context and protocol definition. The schema names are the ones the long
-#: forms' global rules require (AP214: application_protocol_definition_required;
-#: AP242: ap242_application_protocol_definition_required).
-_APPLICATION = {
-    "1996": ("automotive_design", "AUTOMOTIVE_DESIGN_LF", 2010),
-    "ap242": ("managed model based 3d engineering", "ap242_managed_model_based_3d_engineering_mim_lf", 2014),
-}
 
 
 def header(mech: Mechanism, profile: str, filename: str) -> dict:

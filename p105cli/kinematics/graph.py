@@ -241,8 +241,7 @@ def length_columns(mech) -> np.ndarray:
     """Boolean mask (n,) of the flat value vector's length-valued entries (translations)."""
     mask = []
     for p in mech.pairs:
-        for name in p.value_names:
-            mask.append("translation" in name or "displacement" in name)
+        mask.extend(u == "L" for u in p.type.value_units)
     return np.array(mask, dtype=bool)
 
 

@@ -320,8 +320,7 @@ WRITTEN_STATUSES = ("ok", "out_of_range", "singular", "branch_change")
 
 
 def _value_units(pair):
-    names = pair.value_names
-    return ["A" if any(w in n for w in ("rotation", "yaw", "pitch", "roll", "angle")) else "L" for n in names]
+    return ["A" if a else "L" for a in pair.type.angle_mask]
 
 
 def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):

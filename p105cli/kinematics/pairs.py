@@ -185,6 +185,7 @@ from .placements import (compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
     "hat", "vee", "adjoint", "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
+    "VALUE_UNITS",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -777,6 +778,22 @@ def _pin_j(q, p, shape):
 
 # --------------------------------------------------------------------------- the type
 
+#: Every pair value attribute (both layouts) -> its unit kind: "A" plane angle, "L" length,
+#: "P" a point parameter on a pair curve or surface. The only table that says which pair
+#: values are angles; ``PairType.value_units`` reads it.
+VALUE_UNITS = {
+    "actual_rotation": "A", "actual_rotation_1": "A", "first_rotation_angle": "A",
+    "second_rotation_angle": "A", "yaw": "A", "pitch": "A", "roll": "A",
+    "actual_rotation_x": "A", "actual_rotation_y": "A", "actual_rotation_z": "A",
+    "actual_translation": "L", "actual_translation_x": "L", "actual_translation_y": "L",
+    "actual_translation_z": "L", "translation_x": "L", "translation_y": "L", "translation_z": "L",
+    "actual_displacement": "L",
+    "point_parameter": "P", "point_parameter_1": "P", "point_parameter_2": "P",
+    "point_parameter_u": "P", "point_parameter_v": "P", "point_parameter_u_1": "P",
+    "point_parameter_v_1": "P", "point_parameter_u_2": "P", "point_parameter_v_2": "P",
+}
+
+
 @dataclass(frozen=True)
 class PairType:
     """One pair type: its values, parameters and motion.
@@ -797,6 +814,18 @@ class PairType:
     @property
     def value_count(self) -> int:
         return len(self.value_names)
+
+    @property
+    def value_units(self) -> tuple:
+        """The kind of each value, in value order: ``"A"`` a plane angle, ``"L"`` a length,
+        ``"P"`` a curve or surface parameter (converted like a length at I/O). The one rule
+        for which pair values are angles."""
+        return tuple(VALUE_UNITS[n] for n in self.value_names)
+
+    @property
+    def angle_mask(self) -> tuple:
+        """Which values are plane angles (``value_units == "A"``)."""
+        return tuple(u == "A" for u in self.value_units)
 
     def with_defaults(self, **defaults) -> "PairType":
         """The same pair type with other parameter defaults (e.g. ``layout="ap242"``)."""

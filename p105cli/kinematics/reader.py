@@ -135,8 +135,6 @@ _LIMIT_SUFFIXES = {
     "actual_displacement": ("rack_displacement",),
 }
 
-# value names that are plane angles (everything else with a unit is a length)
-_ANGLE_WORDS = ("rotation", "yaw", "pitch", "roll", "angle")
 
 _MISSING = object()
 
@@ -161,7 +159,9 @@ def _is_true(v) -> bool:
 
 
 def _is_angle(value_name: str) -> bool:
-    return any(w in value_name for w in _ANGLE_WORDS)
+    from .pairs import VALUE_UNITS
+
+    return VALUE_UNITS[value_name] == "A"
 
 
 def pair_kind_of_entity(entity: str) -> Optional[str]:

@@ -85,7 +85,6 @@ __all__ = ["Plan", "plan", "forward", "MotionResult", "solve_motion", "PathResul
 #: Status of a configuration, from best to worst (records and the summary use these words).
 STATUSES = ("ok", "out_of_range", "singular", "branch_change", "not_converged", "not_assemblable")
 
-_ANGLE_WORDS = ("rotation", "yaw", "pitch", "roll", "angle")
 _PERIODIC_KINDS = ("revolute", "cylindrical", "universal", "homokinetic", "planar")
 _MAX_HALVINGS = 12
 _MAX_CHUNK = 1024   # configurations solved together at most
@@ -135,8 +134,8 @@ class Plan:
 
 
 def angle_value_mask(pair) -> list:
-    """Which of a pair's values are angles (the rest are lengths)."""
-    return [any(w in n for w in _ANGLE_WORDS) for n in pair.value_names]
+    """Which of a pair's values are angles (the rest are lengths): ``PairType.value_units``."""
+    return list(pair.type.angle_mask)
 
 
 def _structure(mech):

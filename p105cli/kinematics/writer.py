@@ -17,7 +17,7 @@ Two modes:
   assembly (links placed at the initial state), link representations, the
   pairs with their ranges and actuation (and the higher pairs' curves and
   surfaces), the base (placement), the initial state and, in AP242, the
-  loops. Built with the corpus's :class:`~p105cli.corpus.builder.Builder`
+  loops. Built with the corpus's :class:`~p105cli.part105.builder.Builder`
   (units, contexts, placements, products are written by the same code).
 * ``source`` = the document the mechanism was read from: a *conversion*.
   Every instance outside the kinematic structure (products, shapes,
@@ -65,24 +65,23 @@ from collections import defaultdict
 
 import numpy as np
 
-from p105cli.corpus.builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
-from p105cli.corpus.mechanisms import Z_TO_X
-from p105cli.corpus.writers import _APPLICATION, PROFILES as _CORPUS_PROFILES
+from p105cli.part105.builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
+from p105cli.part105.catalogue import APPLICATION as _APPLICATION, PROFILES as _CATALOGUE_PROFILES
 from p105cli.step.values import record_refs as _rec_refs, ref_id
 
+from .dh import Z_TO_X
+from .pairs import PAIR_KINDS
 from .placements import compose, inverse
 
 __all__ = ["PROFILES", "write_mechanism", "SUPPORTED_KINDS"]
 
 #: Schema profiles the writer knows: layout, su_parameters allowed, FILE_SCHEMA.
-PROFILES = {k: dict(v) for k, v in _CORPUS_PROFILES.items()}
+PROFILES = {k: dict(v) for k, v in _CATALOGUE_PROFILES.items()}
 
 #: Per pair kind: the unit of each value ("A" plane angle, "L" length), in value order.
-_VALUE_UNITS = {
-    "revolute": "A", "prismatic": "L", "screw": "A", "cylindrical": "LA", "spherical": "AAA",
-    "universal": "AA", "homokinetic": "AA", "planar": "ALL", "unconstrained": "LLLAAA",
-    "fully_constrained": "", "gear": "A", "rack_and_pinion": "L",
-}
+_WRITTEN_LOW_KINDS = ("revolute", "prismatic", "screw", "cylindrical", "spherical", "universal", "homokinetic",
+                      "planar", "unconstrained", "fully_constrained", "gear", "rack_and_pinion")
+_VALUE_UNITS = {k: "".join(PAIR_KINDS[k].value_units) for k in _WRITTEN_LOW_KINDS}
 #: Higher pairs: their geometry (params key, which pair frame it is given in), in the order of
 #: the pair's attributes; whether an ``orientation`` flag follows.
 _GEOMETRY = {
