@@ -223,6 +223,24 @@ def _example_cases() -> list[Case]:
         "--quaternion", "xyzw", fb)
     add("validate-solved--ex-four_bar_ap242", "validate", "-f", "text", "-",
         stdin="@solve-values-model--ex-four_bar_ap242")
+
+    # options not in the file cases: names, streams, targets, tolerances, JSON models in and out
+    add("interpolate-path-name--ex-four_bar_ap242", "interpolate", "--path", "coupler point P path", "--count", "3",
+        fb)
+    add("interpolate-sequence-name--ex-four_bar_ap242", "interpolate", "--sequence", "four_bar configurations",
+        "--step", "0.2", "--to", "csv", "--what", "configurations", fb)
+    add("interpolate-json-model--ex-four_bar_ap242", "interpolate", "--count", "4", stdin="@parse--ex-four_bar_ap242")
+    add("export-stream--ex-four_bar_ap242", "export", "--to", "json", "--stream", fb)
+    add("export-schema-stream--ex-slider_crank", "export", "--schema", "ap242", "--to", "json", "--stream", sc)
+    add("graph-mechanism--ex-four_bar_ap242", "graph", "--mechanism", "four_bar", "--tol", "1e-6", fb)
+    add("solve-json-model--ex-four_bar_ap242", "solve", "-", "--sweep", "A=0:1.5:4", "--no-timings",
+        stdin="@parse--ex-four_bar_ap242")
+    add("solve-target-frame--ex-four_bar_ap242", "solve", "--program", "--target-frame", "point P", "--mechanism",
+        "four_bar", "--tol", "1e-9", "--max-iter", "50", "--no-timings", "--to", "jsonl", fb)
+    for stem in ("ur5_arm_p105", "gear_train_ap214", "cam_follower_ap242", "rack_and_pinion_p105"):
+        add(f"solve-program-model--{stem}", "solve", "--program", "--no-timings", f"{CORPUS}/{stem}.stp")
+    add("fail-scene-csv", "solve", "--scene", scene, "--keypoints", keys, "--no-timings", "--to", "csv")
+    add("fail-mechanism-unknown--ex-four_bar_ap242", "graph", "--mechanism", "nine_bar", fb)
     return c
 
 
