@@ -142,9 +142,9 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
 
 
 def _evaluate_rules(pop, profile, v: Validation) -> None:
-    from p105cli.schema.evaluator import NotEvaluable
+    from p105cli.schema.evaluator import Evaluator, NotEvaluable
 
-    ev = pop.evaluator
+    ev = Evaluator(pop)
     schema = profile.schema
     closure = kinematic_closure(pop)
     present_types: set = set()
