@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from conftest import CORPUS
+import p105cli.schema as schema_pkg
 from p105cli.schema import SchemaError
 from p105cli.schema.evaluator import INDETERMINATE, Agg, Evaluator
 from p105cli.schema.population import Instance, Population
@@ -399,3 +400,39 @@ def test_big_file_population_and_ids_of_type():
     p = pop.instance(ids[0])
     assert p.get("coordinates") and len(p.get("coordinates")) == 3
     assert evaluator(pop).where_rule(p, "geometric_representation_item", "wr1") is True
+
+
+# --------------------------------------------------------------------------
+# the population knows nothing of the evaluator
+
+
+def _imported_modules(path: Path) -> set:
+    """Every module a source file imports, at the top or inside a function (relative ones resolved)."""
+    import ast
+    root = Path(schema_pkg.__file__).parents[2]            # the directory holding p105cli/
+    package = list(path.parent.relative_to(root).parts)    # e.g. p105cli, schema, evaluator
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            out.add(mod)
+            out.update(f"{mod}.{a.name}" for a in node.names)
+    return out
+
+
+def test_no_import_between_population_and_evaluator():
+    """The evaluator is given a population; neither imports the other, not even lazily."""
+    schema_dir = Path(schema_pkg.__file__).parent
+    for name in ("population.py", "instance.py"):
+        mods = _imported_modules(schema_dir / name)
+        assert not any(m.startswith("p105cli.schema.evaluator") for m in mods), (name, mods)
+    evaluator_files = sorted((schema_dir / "evaluator").glob("*.py"))
+    assert len(evaluator_files) > 5
+    for path in evaluator_files:
+        mods = _imported_modules(path)
+        assert "p105cli.schema.instance" in mods or path.name in (
+            "__init__.py", "core.py", "scope.py"), (path.name, mods)
+        assert not any(m.startswith("p105cli.schema.population") for m in mods), (path.name, mods)

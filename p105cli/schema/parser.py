@@ -23,9 +23,6 @@ BUILTIN_FUNCTIONS = frozenset(
 BUILTIN_PROCEDURES = frozenset(("insert", "remove"))
 
 
-# --------------------------------------------------------------------------
-# parser
-
 REL_OPS = frozenset(("=", "<>", "<", ">", "<=", ">=", ":=:", ":<>:", "in", "like"))
 ADD_OPS = frozenset(("+", "-", "or", "xor"))
 MUL_OPS = frozenset(("*", "/", "div", "mod", "and", "||"))

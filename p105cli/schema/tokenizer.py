@@ -22,9 +22,6 @@ class ExpressSyntaxError(Exception):
         return f"{self.filename}:{self.line}:{self.column}: {self.message}"
 
 
-# --------------------------------------------------------------------------
-# tokenizer
-
 # Comments are blanked out first (they nest, which a regular expression
 # cannot follow); strings must be recognised on the way so that a quote in
 # a string does not open a comment and "(*" in a string is left alone.

@@ -8,8 +8,6 @@ from functools import lru_cache
 import numpy as np
 
 
-# --------------------------------------------------------------------------- banded storage
-
 @lru_cache(maxsize=64)
 def _band_map(nblk: int, b: int, kl: int, ku: int, extra: int):
     """Flat target/source indices that scatter block-tridiagonal (D, U, U^T) into LAPACK band storage.

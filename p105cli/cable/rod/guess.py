@@ -16,8 +16,6 @@ from .quaternions import _cross, _qconj, _qexp, _qmat, _qmul
 _E3 = np.array([0.0, 0.0, 1.0])
 
 
-# --------------------------------------------------------------------------- initial guesses
-
 def _transport_frames(t, q0):
     """Quaternions of frames with z = t (n,3), carried from q0 by parallel transport.
 

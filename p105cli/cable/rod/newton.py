@@ -15,8 +15,6 @@ from .quaternions import _qexp, _qmul
 MAX_TURN = 0.6          # rad: largest rotation of one segment in one Newton step
 
 
-# --------------------------------------------------------------------------- Newton
-
 def _newton(m: _Model, q, mu, x, tol, max_iter, inertia=True, check=True):
     """Globalised Newton. Returns (q, mu, x, residual, iterations, converged).
 

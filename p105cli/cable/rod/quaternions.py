@@ -14,8 +14,6 @@ import numpy as np
 _EYE3 = np.eye(3)
 
 
-# --------------------------------------------------------------------------- quaternion helpers
-
 def _qmul_components(a, b):
     aw, ax, ay, az = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bw, bx, by, bz = b[..., 0], b[..., 1], b[..., 2], b[..., 3]

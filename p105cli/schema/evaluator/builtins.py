@@ -10,10 +10,6 @@ from ..instance import Instance
 from .values import Agg, BinaryValue, NotEvaluable, _IND, _is_number, _plain
 
 
-# --------------------------------------------------------------------------
-# built-in functions: each takes (evaluator, call node, scope)
-
-
 def _args(ev, node, sc, n=None):
     vals = [ev.ev(a, sc) for a in node.args]
     if n is not None and len(vals) != n:

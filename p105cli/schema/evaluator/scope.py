@@ -6,10 +6,6 @@ from __future__ import annotations
 from .values import _IND
 
 
-# --------------------------------------------------------------------------
-# scopes and control-flow signals
-
-
 class _Scope:
     __slots__ = ("vars", "decl", "parent", "self_obj", "ctx", "algos")
 
