@@ -39,7 +39,7 @@ def _mkey(v):
 
 
 class Algorithms:
-    """Calls of algorithms and constructors, and statements (a mixin of ``core.Evaluator``)."""
+    """Calls of algorithms and constructors, and statements (an ``Evaluator`` mixin)."""
 
     # ---------------------------------------------------------------- calls
     def _lookup_algorithm(self, name, sc):

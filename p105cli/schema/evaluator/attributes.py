@@ -22,7 +22,7 @@ class _AttrInfo:
 
 
 class Attributes:
-    """Explicit, derived and inverse attribute look-up (a mixin of ``core.Evaluator``)."""
+    """Explicit, derived and inverse attribute look-up (an ``Evaluator`` mixin)."""
 
     # ---------------------------------------------------------------- attributes
     def _info(self, obj) -> _AttrInfo:

@@ -17,7 +17,7 @@ from .values import (
 
 
 class Expressions:
-    """The evaluation of expression nodes and references (a mixin of ``core.Evaluator``)."""
+    """The evaluation of expression nodes and references (an ``Evaluator`` mixin)."""
 
     # ================================================================ expressions
     def ev(self, node, sc):

@@ -13,7 +13,7 @@ from .values import (
 
 
 class Operators:
-    """Comparisons and arithmetic (a mixin of ``core.Evaluator``)."""
+    """Comparisons and arithmetic (an ``Evaluator`` mixin)."""
 
     # ---------------------------------------------------------------- comparisons
     def _compare(self, op, a, b):

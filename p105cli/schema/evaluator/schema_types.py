@@ -15,7 +15,7 @@ from .values import (
 
 
 class SchemaTypes:
-    """Type descriptions, raw -> value conversion, coercion and TYPEOF (a mixin of ``core.Evaluator``)."""
+    """Type descriptions, raw -> value conversion, coercion and TYPEOF (an ``Evaluator`` mixin)."""
 
     # ================================================================ type machinery
     def _named(self, name: str) -> NamedType:
