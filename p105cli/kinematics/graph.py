@@ -43,7 +43,7 @@ pair-value vector (:attr:`Mechanism.value_slices`) is exact:
 twist of ``T_loop`` (``vee(dT_loop T_loop^-1)``) and ``Jl`` the left
 Jacobian of SO(3). The twist of each pair is ``+-Ad(F) J_body`` with ``F``
 the placement of the pair's second pair frame
-(:meth:`PairType.motion_jacobian`, :func:`pairs.adjoint`).
+(:meth:`PairType.motion_jacobian`, :func:`spatial.adjoint`).
 
 **Tolerances.** The rank is taken on a dimensionless Jacobian: translation
 rows divided, translation columns (values named ``*translation*``,
@@ -66,7 +66,8 @@ from typing import Optional
 
 import numpy as np
 
-from .pairs import UnsupportedPairError, adjoint
+from .pairs import UnsupportedPairError
+from .spatial import adjoint
 from .placements import inverse, matrix_to_quaternion
 
 __all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "rotation_vector",

@@ -76,7 +76,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .pairs import adjoint
+from .spatial import adjoint
 from .placements import inverse
 
 __all__ = ["Plan", "plan", "forward", "MotionResult", "solve_motion", "PathResult", "solve_path",
