@@ -145,8 +145,12 @@ class Structure:
 
 # --------------------------------------------------------------------------- topology
 
-def _topology(mech):
-    """BFS spanning forest, chords and loops (names)."""
+def topology(mech):
+    """The spanning forest (breadth-first from the base link, then from each further component's
+    first link), chords and loops: ``(order, tree, roots, components, chords, loops)``, links by
+    name, pairs by index (``tree``: ``(pair, parent, child, forward)``; loops: ``(pair, forward)``).
+    The one spanning-tree walk: the solvers (:func:`p105cli.kinematics.solver.plan`) and the
+    model writer use it."""
     pairs = mech.pairs
     adj = {ln.name: [] for ln in mech.links}
     for k, p in enumerate(pairs):
@@ -367,7 +371,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         raise ValueError(f"tol must be a positive number, got {tol!r}")
     pairs = mech.pairs
     names = [p.name for p in pairs]
-    order, tree_idx, roots, comps, chords, loops = _topology(mech)
+    order, tree_idx, roots, comps, chords, loops = topology(mech)
     link_comp = {ln: ci for ci, comp in enumerate(comps) for ln in comp}
     n = mech.value_count
     slices = mech.value_slices

@@ -300,15 +300,30 @@ def adjoint_apply(T, X) -> np.ndarray:
 
 def rotation_vector(R) -> np.ndarray:
     """Rotation vector (..., 3) of rotations (..., 3, 3) or (..., 4, 4): axis times angle,
-    angle in [0, pi] (scipy's ``as_rotvec``). Through the quaternion (Shepperd), so it is
-    accurate near 0 and near pi alike; at exactly pi the axis's sign is the quaternion's."""
-    q = matrix_to_quaternion(R)                 # w >= 0
-    w, v = q[..., 0], q[..., 1:]
-    s = np.linalg.norm(v, axis=-1)
-    angle = 2.0 * np.arctan2(s, w)
-    small = s < 1e-12
-    factor = np.where(small, 2.0 / np.where(w > 0.0, w, 1.0), angle / np.where(small, 1.0, s))
-    return v * factor[..., None]
+    angle in [0, pi] (scipy's ``as_rotvec``). The angle is ``atan2(sin, cos)`` of the trace
+    and the antisymmetric part, accurate near 0; near pi (cos < -0.99), where the
+    antisymmetric part vanishes, the axis comes from the symmetric part and its sign from
+    the antisymmetric part."""
+    R = _rot_part(R, "R")
+    c = np.clip(0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0), -1.0, 1.0)
+    w = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]],
+                       axis=-1)
+    s = np.linalg.norm(w, axis=-1)
+    th = np.arctan2(s, c)
+    f = np.where(s > 1e-12, th / np.where(s > 1e-12, s, 1.0), 1.0 + th * th / 6.0)
+    out = w * f[..., None]
+    near_pi = c < -0.99
+    if near_pi.any():
+        # sin(th) ~ 0: R + R^T - 2 c I = 2 (1 - c) u u^T; its largest diagonal entry's row is
+        # the best-conditioned multiple of the axis u.
+        Rn, cn, wn = R[near_pi], c[near_pi], w[near_pi]
+        Rs = 0.5 * (Rn + np.swapaxes(Rn, -1, -2)) - cn[:, None, None] * np.eye(3)
+        j = np.argmax(np.diagonal(Rs, axis1=-2, axis2=-1), axis=-1)
+        axis = np.take_along_axis(Rs, j[:, None, None], axis=-2)[:, 0]
+        axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+        axis = np.where((np.sum(axis * wn, axis=-1) < 0.0)[:, None], -axis, axis)
+        out[near_pi] = th[near_pi][:, None] * axis
+    return out
 
 
 def rotation_matrix(phi) -> np.ndarray:
