@@ -98,21 +98,23 @@ def closure(pl: Plan, Q, *, jacobian: bool = True):
     return r, J
 
 
-def loop_twists(pl: Plan, Q):
+def loop_twists(pl: Plan, Q, loops=None):
     """The loops before the residual map: ``T_loop`` (B, L, 4, 4) and the twist Jacobian
     (B, 6L, nv), the spatial twist ``(v, w)`` of each ``T_loop`` (in its start link's frame)
-    per unit change of each value. :func:`closure`'s Jacobian is ``D(T_loop)`` times it, with
-    ``D`` invertible (``q_w > 0``): the same rank and null space, so structure analysis
+    per unit change of each value, for the loops of ``pl.loops`` numbered in ``loops`` (all
+    by default), in that order. :func:`closure`'s Jacobian is ``D(T_loop)`` times it, ``D``
+    invertible (``q_w > 0``): the same rank and null space, so the structure analysis
     (:mod:`p105cli.kinematics.graph`) reads mobility and redundancy from this one."""
     Q = np.atleast_2d(Q)
-    B, L = Q.shape[0], len(pl.loops)
+    loops = range(len(pl.loops)) if loops is None else list(loops)
+    B, L = Q.shape[0], len(loops)
     Tl = np.empty((B, L, 4, 4))
     J = np.zeros((B, 6 * L, pl.nv))
-    for li in range(L):
+    for i, li in enumerate(loops):
         T, S, idx = _loop_terms(pl, li, Q, True)
-        Tl[:, li] = T
+        Tl[:, i] = T
         if S is not None:
-            J[:, 6 * li:6 * li + 6, idx] = S
+            J[:, 6 * i:6 * i + 6, idx] = S
     return Tl, J
 
 

@@ -166,15 +166,17 @@ def forward(pl: Plan, Q, *, world: bool = True) -> np.ndarray:
 
 
 def link_poses(pl: Plan, q, *, world: bool = False, strict: bool = True):
-    """Placements (..., 4, 4) of every link for values ``q`` (..., nv), in ``pl.link_names``
-    order, by plain products ``T_child = T_parent T_link1_link2`` (or its inverse) in tree
-    order; each component's root at the identity (``world``: the base link's at
-    ``T_world_base``). Returns ``(poses, unsupported)``: ``unsupported`` maps the index of
-    every pair whose motion is not available at these values to the reason. ``strict``
-    raises :class:`UnsupportedPairError` naming the first one instead; otherwise the links
-    beyond such a pair are None."""
+    """Link placements for values ``q`` (..., nv), by plain products ``T_child = T_parent
+    T_link1_link2`` (or its inverse) in tree order; each component's root at the identity
+    (``world``: the base link's at ``T_world_base``).
+
+    Returns ``(links, pairs, unsupported)``: ``links`` the placements (..., 4, 4) in
+    ``pl.link_names`` order, ``pairs`` every pair's ``T_link1_link2`` in pair order,
+    ``unsupported`` maps the index of every pair whose motion is not available at these
+    values to the reason. ``strict`` raises :class:`UnsupportedPairError` naming the first
+    such pair instead; otherwise its ``T`` and the placements of the links beyond it are None."""
     q = np.asarray(q, dtype=np.float64)
-    T, bad = {}, {}
+    T, bad = [None] * len(pl.types), {}
     for k, t in enumerate(pl.types):
         try:
             M = t.motion(q[..., pl.slices[k]], **pl.params[k])
@@ -193,7 +195,7 @@ def link_poses(pl: Plan, q, *, world: bool = False, strict: bool = True):
     if world and pl.roots:
         X[pl.roots[0]] = np.broadcast_to(pl.mech.T_world_base, eye.shape)
     for k, u, v, fwd in pl.tree:
-        if k not in T or X[u] is None:
+        if T[k] is None or X[u] is None:
             continue
         X[v] = X[u] @ (T[k] if fwd else inverse(T[k]))
-    return X, bad
+    return X, T, bad
