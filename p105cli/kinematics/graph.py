@@ -282,7 +282,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
     size = float(mech.size())
     notes = []
 
-    X, T, bad = link_poses(pl, mech.initial_vector(), strict=False)
+    X, T, bad = link_poses(pl, mech.initial_vector(), unsupported="skip")
     X = {ln: X[i] for ln, i in pl.link_index.items()}
     for k in sorted(bad):
         notes.append(f"pair {names[k]!r} ({pairs[k].kind}): no motion available ({bad[k]}), "

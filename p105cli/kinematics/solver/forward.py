@@ -165,27 +165,33 @@ def forward(pl: Plan, Q, *, world: bool = True) -> np.ndarray:
     return np.moveaxis(out, 0, 1)
 
 
-def link_poses(pl: Plan, q, *, world: bool = False, strict: bool = True):
+def link_poses(pl: Plan, q, *, world: bool = False, unsupported: str = "raise"):
     """Link placements for values ``q`` (..., nv), by plain products ``T_child = T_parent
     T_link1_link2`` (or its inverse) in tree order; each component's root at the identity
     (``world``: the base link's at ``T_world_base``).
 
-    Returns ``(links, pairs, unsupported)``: ``links`` the placements (..., 4, 4) in
+    Returns ``(links, pairs, skipped)``: ``links`` the placements (..., 4, 4) in
     ``pl.link_names`` order, ``pairs`` every pair's ``T_link1_link2`` in pair order,
-    ``unsupported`` maps the index of every pair whose motion is not available at these
-    values to the reason. ``strict`` raises :class:`UnsupportedPairError` naming the first
-    such pair instead; otherwise its ``T`` and the placements of the links beyond it are None."""
+    ``skipped`` maps the index of every pair whose motion is not available at these values
+    (:class:`UnsupportedPairError`, or parameters its motion refuses) to the reason. Such a
+    pair: ``unsupported="raise"`` raises UnsupportedPairError naming it; ``"skip"`` leaves
+    its ``T`` and the placements of the links beyond it None; ``"identity"`` takes its ``T``
+    as the identity (its second link placed at its first's)."""
+    if unsupported not in ("raise", "skip", "identity"):
+        raise ValueError(f"unsupported must be 'raise', 'skip' or 'identity', got {unsupported!r}")
     q = np.asarray(q, dtype=np.float64)
     T, bad = [None] * len(pl.types), {}
     for k, t in enumerate(pl.types):
         try:
             M = t.motion(q[..., pl.slices[k]], **pl.params[k])
         except (UnsupportedPairError, ValueError, TypeError) as err:
-            # no motion for this pair type, or parameters its motion refuses (e.g. a skew
-            # angle against WR1)
-            if strict:
+            # no motion for this pair type (a rolling surface pair is not a function of its
+            # values), or parameters its motion refuses (e.g. a skew angle against WR1)
+            if unsupported == "raise":
                 raise UnsupportedPairError(f"pair {pl.pair_names[k]!r}: {err}") from err
             bad[k] = str(err)
+            if unsupported == "identity":
+                T[k] = np.broadcast_to(np.eye(4), q.shape[:-1] + (4, 4))
             continue
         T[k] = pl.P1[k] @ M @ pl.P2inv[k]
     eye = np.broadcast_to(np.eye(4), q.shape[:-1] + (4, 4))
