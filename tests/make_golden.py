@@ -11,8 +11,9 @@ Each case is one ``p105`` command run in-process (``p105cli.cli.main``) from the
 repository root with relative paths, stdin given or empty, stdout and stderr captured;
 ``tests/test_golden_cli.py`` runs the cases again and compares. A case's golden file
 ``tests/data/golden_cli/<id>.json`` (``.json.gz`` when large) holds its arguments,
-stdin, exit status, stderr and stdout. ``stdin`` is ``null`` (empty), or ``"@<id>"``:
-the golden stdout of another case (a pipeline, each stage checked on its own).
+stdin, exit status, stderr and stdout. ``stdin`` is ``null`` (empty), ``"@<id>"``: the
+golden stdout of another case (a pipeline, each stage checked on its own), or ``"<path"``:
+a file of the repository.
 
 Paths into the shared data (``../shared``, or ``$P105_SHARED``) are written
 ``{shared}/...`` in the arguments and in the captured text, so the goldens do not
@@ -64,7 +65,7 @@ _ENV_OFF = ("GITHUB_ACTIONS",)
 class Case:
     id: str
     args: tuple[str, ...]
-    stdin: str | None = None  # None, or "@<case id>"
+    stdin: str | None = None  # None, "@<case id>" (its golden stdout) or "<path" (a file of the repository)
 
     @property
     def needs_shared(self) -> bool:
@@ -193,10 +194,14 @@ def _example_cases() -> list[Case]:
     add("solve-values-mm--ex-slider_crank", "solve", sc, "--sweep", "O=0:360:9", "--angle-unit", "deg",
         "--length-unit", "mm", "--no-timings", "--to", "csv")
     add("solve-sweep-model--ex-slider_crank", "solve", sc, "--sweep", "O=0:1.5:4", "--no-timings")
-    add("solve-values-stdin--ex-four_bar_ap242", "solve", fb, "--values", "-", "--no-timings", "--to", "jsonl",
-        stdin="@solve-values-jsonl--ex-four_bar_ap242")
+    add("solve-values-stdin--ex-four_bar_ap242", "solve", fb, "--values", "-", "--angle-unit", "deg", "--no-timings",
+        "--to", "jsonl", stdin=f"<{crank}")
+    add("fail-solve-values-from-solve-output--ex-four_bar_ap242", "solve", fb, "--values", "-", "--no-timings",
+        "--to", "jsonl", stdin="@solve-values-jsonl--ex-four_bar_ap242")
+    add("parse-stdin--ex-four_bar_ap242", "parse", stdin=f"<{fb}")
     for branch, name in (("initial", "initial"), ("+", "plus"), ("-", "minus")):
-        add(f"solve-branch-{name}--ex-four_bar_ap242", "solve", fb, "--sweep", "A=0:6.283185307179586:25", "--branch", branch, "--no-timings", "--to", "jsonl")
+        add(f"solve-branch-{name}--ex-four_bar_ap242", "solve", fb, "--sweep", "A=0:6.283185307179586:25",
+            "--branch", branch, "--no-timings", "--to", "jsonl")
     add("solve-program-model--ex-four_bar_ap242", "solve", "--program", "--no-timings", fb)
     add("solve-program-count-model--ex-slider_crank", "solve", "--program", "--count", "5", "--no-timings", sc)
     add("solve-program-step--ex-four_bar_ap242", "solve", "--program", "--step", "0.1", "--no-timings", "--to",
@@ -435,8 +440,10 @@ def run_subprocess(argv: list[str], stdin: bytes = b"") -> tuple[int, bytes, str
 def run_case(case: Case, golden_stdout_of, runner=run_in_process) -> dict:
     """Run ``case``; ``golden_stdout_of(id)`` gives a stdin named ``@id``."""
     stdin = b""
-    if case.stdin is not None:
+    if case.stdin is not None and case.stdin.startswith("@"):
         stdin = golden_stdout_of(case.stdin[1:]).encode("utf-8")
+    elif case.stdin is not None:
+        stdin = (ROOT / case.stdin[1:]).read_bytes()
     code, stdout, stderr = runner(command_line(case), stdin)
     return {"id": case.id, "args": list(case.args), "stdin": case.stdin, "exit": code,
             "stderr": normalise(stderr), "stdout": normalise(stdout.decode("utf-8"))}
