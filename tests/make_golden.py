@@ -168,6 +168,8 @@ def _example_cases() -> list[Case]:
     add("validate-stdin-pass--ex-slider_crank-ap242", "validate", "--pass", "-f", "text",
         stdin="@export-quiet-schema-ap242--ex-slider_crank")
     add("graph-stdin--ex-four_bar_ap242-json", "graph", stdin="@parse--ex-four_bar_ap242")
+    add("validate-pass-enriched--ex-four_bar_ap242", "validate", "--pass", "-f", "text",
+        stdin="@graph-enrich--ex-four_bar_ap242")
 
     # convert-dh-su: both tables, every output and profile
     for schema in ("ap242", "p105", "ap214"):
