@@ -32,6 +32,7 @@ from typing import Callable
 import numpy as np
 
 from ..step.errors import ModelError
+from ..schema.values import number
 from ..step.values import ref_id
 from . import geometry as G
 from .placements import axis2_placement_3d
@@ -50,11 +51,10 @@ _ref = ref_id
 
 
 def _num(v, inst, attr) -> float:
-    if isinstance(v, dict) and "value" in v:      # typed parameter, e.g. LENGTH_MEASURE(1.)
-        v = v["value"]
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
+    x = number(v)  # typed parameters too, e.g. LENGTH_MEASURE(1.)
+    if x is None:
         raise ModelError(f"#{inst.id} ({_kind(inst)}): {attr} is not a number ({v!r})", f"#{inst.id}")
-    return float(v)
+    return x
 
 
 def _kind(inst) -> str:

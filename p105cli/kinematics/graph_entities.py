@@ -31,6 +31,7 @@ No click, no numpy.
 
 from __future__ import annotations
 
+from p105cli.schema.values import refs
 from p105cli.step.jsonmodel import extended
 
 __all__ = ["EnrichError", "enrich"]
@@ -44,10 +45,7 @@ def _ref(i: int) -> dict:
     return {"ref": i}
 
 
-def _refs(value) -> list:
-    if isinstance(value, list):
-        return [v["ref"] for v in value if isinstance(v, dict) and "ref" in v]
-    return []
+_refs = refs  # the ids of a list of references (schema/values.py)
 
 
 def _simple_type(rec: dict):

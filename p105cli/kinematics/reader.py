@@ -80,61 +80,22 @@ from typing import Optional
 
 import numpy as np
 
+from ..part105.catalogue import GEOMETRY_ATTRIBUTES as _GEOMETRY_ATTRS
+from ..part105.catalogue import HIGHER_KINDS as _HIGHER_KINDS
+from ..part105.catalogue import HIGHER_PAIR_ENTITIES, RANGE_ON, limit_attributes, pair_kind_of_entity, range_on_values
+from ..schema.units import ANGLE, LENGTH, ContextUnits, context_units
 # one reading of typed values, references and unlimited limits, shared with the KIN-* checks
-from ..rules.kinematics import ANGLE, LENGTH, ContextUnits, context_units
-from ..rules.kinematics import _is_unlimited, _num, _ref, _untyped  # noqa: F401 - shared helpers
+from ..schema.values import is_true as _is_true
+from ..schema.values import is_unlimited as _is_unlimited
+from ..schema.values import number as _num
+from ..schema.values import ref as _ref
+from ..schema.values import untyped as _untyped
 from ..step.errors import ModelError
 from . import placements as pl
 from .model import Link, Mechanism, Pair, Units
 
 __all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "population", "HIGHER_PAIR_ENTITIES",
            "pair_kind_of_entity"]
-
-#: Higher pair entity names (both layouts) -> pair kind. The low pairs come from
-#: :data:`p105cli.kinematics.pairs.PAIRS`.
-HIGHER_PAIR_ENTITIES = {
-    "point_on_surface_pair": "point_on_surface",
-    "point_on_surface_pair_with_range": "point_on_surface",
-    "sliding_surface_pair": "sliding_surface",
-    "rolling_surface_pair": "rolling_surface",
-    "point_on_planar_curve_pair": "point_on_planar_curve",
-    "point_on_planar_curve_pair_with_range": "point_on_planar_curve",
-    "sliding_curve_pair": "sliding_curve",
-    "rolling_curve_pair": "rolling_curve",
-}
-
-# Geometry attributes of the higher pairs: attribute -> (params key, which pair frame)
-_GEOMETRY_ATTRS = {
-    "pair_curve": ("curve", 1),
-    "pair_surface": ("surface", 1),
-    "curve_1": ("curve_1", 1),
-    "curve_2": ("curve_2", 2),
-    "surface_1": ("surface_1", 1),
-    "surface_2": ("surface_2", 2),
-}
-
-_HIGHER_KINDS = frozenset(HIGHER_PAIR_ENTITIES.values())
-
-# range_on_* attributes (1996 *_pair_range, AP242 *_with_range) -> the values they bound
-_RANGE_ON = {
-    "range_on_pair_curve": ("point_parameter",),
-    "range_on_pair_surface": ("point_parameter_u", "point_parameter_v"),
-    "range_on_curve_1": ("point_parameter_1",),
-    "range_on_curve_2": ("point_parameter_2",),
-    "range_on_surface_1": ("point_parameter_u_1", "point_parameter_v_1"),
-    "range_on_surface_2": ("point_parameter_u_2", "point_parameter_v_2"),
-}
-_RANGE_GEOMETRY = {"range_on_pair_curve": "curve", "range_on_pair_surface": "surface",
-                   "range_on_curve_1": "curve_1", "range_on_curve_2": "curve_2",
-                   "range_on_surface_1": "surface_1", "range_on_surface_2": "surface_2"}
-
-# value name -> suffixes of the lower_limit_/upper_limit_ attributes that bound it
-_LIMIT_SUFFIXES = {
-    "first_rotation_angle": ("first_rotation",),
-    "second_rotation_angle": ("second_rotation",),
-    "actual_displacement": ("rack_displacement",),
-}
-
 
 _MISSING = object()
 
@@ -153,25 +114,10 @@ def _restated(e: ModelError, default_id) -> ModelError:
     return _error(default_id, e.message)
 
 
-def _is_true(v) -> bool:
-    v = _untyped(v)
-    return v is True or (type(v) is dict and str(v.get("enum", "")).upper() == "T")
-
-
 def _is_angle(value_name: str) -> bool:
     from .pairs import VALUE_UNITS
 
     return VALUE_UNITS[value_name] == "A"
-
-
-def pair_kind_of_entity(entity: str) -> Optional[str]:
-    """The pair kind of a pair entity name (``revolute_pair_with_range`` -> ``revolute``), or None."""
-    from .pairs import PAIRS
-
-    t = PAIRS.get(entity)
-    if t is not None:
-        return t.kind
-    return HIGHER_PAIR_ENTITIES.get(entity)
 
 
 # --------------------------------------------------------------------------- units of a context
@@ -791,32 +737,27 @@ class _Reader:
         t = PAIR_KINDS.get(kind)
         value_names = t.value_names if t is not None else ()
         on = {}  # value name -> (lower, upper) from a trimmed curve / surface
-        for attr, targets in _RANGE_ON.items():
+        for attr, spec in RANGE_ON.items():
             if attr not in names:
                 continue
             rng = d.ref(holder, attr, optional=True)
             if rng is None:
                 continue
-            key = _RANGE_GEOMETRY[attr]
-            if kind in ("rolling_surface",) and attr == "range_on_surface_1":
-                targets = ("point_parameter_u", "point_parameter_v")
-            if key not in geometry:
+            if spec.geometry not in geometry:
                 continue
-            for vname, lim in zip(targets, self._parameter_range(holder, attr, rng, geometry[key])):
+            for vname, lim in zip(range_on_values(attr, kind),
+                                  self._parameter_range(holder, attr, rng, geometry[spec.geometry])):
                 on[vname] = lim
         lower, upper = [], []
         for v in value_names:
             lo = hi = None
             if v in on:
                 lo, hi = on[v]
-            suffixes = _LIMIT_SUFFIXES.get(v, (v, v.removeprefix("actual_")))
-            for suf in suffixes:
-                a, b = f"lower_limit_{suf}", f"upper_limit_{suf}"
-                if a in names and b in names:
-                    f = s.angle if _is_angle(v) else s.length
-                    lo = self._limit(holder, a, f)
-                    hi = self._limit(holder, b, f)
-                    break
+            ab = limit_attributes(v)
+            if ab is not None and ab[0] in names and ab[1] in names:
+                f = s.angle if _is_angle(v) else s.length
+                lo = self._limit(holder, ab[0], f)
+                hi = self._limit(holder, ab[1], f)
             lower.append(lo)
             upper.append(hi)
         return tuple(lower), tuple(upper)

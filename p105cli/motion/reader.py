@@ -25,6 +25,7 @@ from typing import Optional
 import numpy as np
 
 from p105cli.step.errors import ModelError
+from p105cli.schema.values import number
 from p105cli.step.values import ref_id
 from .paths import KinematicPath, PathError, PathSegment
 
@@ -50,11 +51,10 @@ _ref = ref_id
 
 
 def _num(v) -> float:
-    if isinstance(v, dict) and "value" in v:
-        v = v["value"]
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
+    x = number(v)
+    if x is None:
         raise TypeError(f"not a number: {v!r}")
-    return float(v)
+    return x
 
 
 def _error(inst_id: int, message: str) -> ModelError:
@@ -95,7 +95,7 @@ def _link_name(pop, rep_id: Optional[int]) -> Optional[str]:
 def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult:
     """Every kinematic path of the model, SI units."""
     from p105cli.schema.population import Population
-    from p105cli.rules.kinematics import ANGLE, LENGTH, context_units
+    from p105cli.schema.units import ANGLE, LENGTH, context_units
 
     pop = pop or Population(doc, profile)
     out = MotionReadResult()
