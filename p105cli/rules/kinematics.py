@@ -111,6 +111,11 @@ KIN-PLACEMENT      Placements used by kinematic instances (referenced
                    the one written), a transformation operator with a scale
                    other than 1 (not a rigid placement). Non-unit directions
                    are fine (normalised)
+KIN-LINK-NAME      (warning) two links of one mechanism with the same name (a link
+                   is called by its name, else its representation's, else
+                   ``#id``: part105/layout.py's rule, which every command
+                   uses); p105 then calls each ``<name> #<id>``, which the
+                   file's other readers will not
 KIN-UNREACHABLE    (warning) links, joints, pairs, pair values, pair ranges,
                    link representations (and their relations), pair
                    representation relationships, structures and states that
@@ -131,7 +136,9 @@ from __future__ import annotations
 import math
 from typing import Optional
 
+from ..part105 import layout
 from ..part105.catalogue import KINEMATIC_ENTITIES, LIMITS, RANGE_ON, YPR_NAMES
+from ..part105.model_file import ModelFile
 from ..schema.units import ANGLE, KIND_SYMBOL as _KIND_SYMBOL, LENGTH, ContextUnits, UnitReader
 from ..schema.values import enum, is_false, is_unlimited, number, ref, untyped
 from ..step.values import refs_in as _refs_in
@@ -144,6 +151,7 @@ RANGE = "KIN-RANGE"
 YPR = "KIN-YPR"
 PLACEMENT = "KIN-PLACEMENT"
 UNREACHABLE = "KIN-UNREACHABLE"
+LINK_NAME = "KIN-LINK-NAME"
 
 RULES = {  # one sentence each, ready for diagnostics.register_rule
     UNITS: "Length and plane-angle units of a mechanism's representations are missing, "
@@ -155,6 +163,8 @@ RULES = {  # one sentence each, ready for diagnostics.register_rule
     PLACEMENT: "A placement used by a kinematic entity is degenerate, non-finite, "
                "non-orthogonal or not rigid.",
     UNREACHABLE: "A kinematic entity is not reachable from any mechanism.",
+    LINK_NAME: "Two links of a mechanism have the same name: p105 tells them apart by appending "
+               "their #id (part105/layout.py's naming rule).",
 }
 
 #: Entity names of Part 105 in both layouts (1996 / AP214 and AP242).
@@ -220,7 +230,8 @@ class _Kin:
         self.schema = pop.schema
         self.out: list = []
         self._seen: set = set()
-        self.units = UnitReader(pop)
+        self.mf = ModelFile.of(pop, lenient=True)  # the lenient access of the layout walk
+        self.units = self.mf.units
         self._pair_units: dict = {}
         self._reps_of_link: dict = {}
         self.refs: dict = {}
@@ -339,11 +350,7 @@ class _Kin:
 
     # ---------------------------------------------------------------- structure
     def joint_links(self, joint) -> tuple:
-        if joint is None:
-            return None, None
-        if self.has(joint, "first_link"):
-            return self.get_ref(joint, "first_link"), self.get_ref(joint, "second_link")
-        return self.get_ref(joint, "edge_start"), self.get_ref(joint, "edge_end")
+        return layout.joint_links(self.mf, joint)
 
     def pair_links(self, pair) -> tuple:
         return self.joint_links(self.get_ref(pair, "joint"))
@@ -355,37 +362,16 @@ class _Kin:
             return []
         reps = self._reps_of_link.get(link)
         if reps is None:
-            reps = []
-            for r in self.back.get(link, ()):
-                t = self.types(r)
-                if "kinematic_link_representation_relation" in t:
-                    if self.get_ref(r, "topological_aspects") == link:
-                        g = self.get_ref(r, "geometric_aspects")
-                        if g is not None:
-                            reps.append(g)
-                elif "kinematic_link_representation" in t:
-                    if self.get_ref(r, "represented_link") == link:
-                        reps.append(r)
-            reps = list(dict.fromkeys(reps))
-            self._reps_of_link[link] = reps
+            reps = self._reps_of_link[link] = layout.link_reps(self.mf, link)
         return reps
 
     def pair_rep(self, pair, which: int) -> Optional[int]:
         """The link representation of the pair's first (1) or second (2) link."""
-        links = self.pair_links(pair)
-        reps = self.link_reps(links[which - 1])
-        if reps:
-            frame = self.get_ref(pair, f"transform_item_{which}")
-            for r in reps:  # prefer the one holding the pair frame
-                if frame is not None and frame in self.refs.get(r, ()):
-                    return r
-            return reps[0]
+        link = self.pair_links(pair)[which - 1]
         frame = self.get_ref(pair, f"transform_item_{which}")
-        if frame is None:
+        if link is None and frame is None:
             return None
-        for r in self.referrers(frame, ("kinematic_link_representation",)):
-            return r
-        return None
+        return layout.frame_rep(self.mf, link, frame)
 
     def pair_units(self, pair) -> tuple:
         """(ContextUnits of the pair's first-link context or None, that link representation)."""
@@ -444,41 +430,7 @@ class _Kin:
 
 def _mechanism_parts(k: _Kin, mech) -> tuple:
     """(pairs, links, reference link representation) of a mechanism."""
-    joints: list = []
-    pairs: list = []
-    base_rep = None
-    if k.is_a(mech, "mechanism"):
-        struct = k.get_ref(mech, "structure_definition")
-        joints = _refs_in(k.get(struct, "joints", []), []) if struct is not None else []
-        base = k.get_ref(mech, "base")
-        reps = k.link_reps(base)
-        base_rep = reps[0] if reps else None
-        links = [base] if base is not None else []
-    else:
-        links = []
-        for prr in _refs_in(k.get(mech, "items", []), []):
-            p = k.get_ref(prr, "transformation_operator")
-            if p is not None and k.is_a(p, "kinematic_pair"):
-                pairs.append(p)
-                j = k.get_ref(p, "joint")
-                if j is not None:
-                    joints.append(j)
-        topo = k.get_ref(mech, "represented_topology")
-        if topo is not None:
-            joints.extend(j for j in _refs_in(k.get(topo, "items", []), [])
-                          if k.is_a(j, "kinematic_joint"))
-        for kp in k.referrers(mech, ("kinematic_property_mechanism_representation",),
-                              "used_representation"):
-            b = k.get_ref(kp, "base")
-            if b is not None:
-                base_rep = b
-                break
-    joints = list(dict.fromkeys(joints))
-    for j in joints:
-        for p in k.referrers(j, ("kinematic_pair",), "joint"):
-            pairs.append(p)
-        links.extend(x for x in k.joint_links(j) if x is not None)
-    return list(dict.fromkeys(pairs)), list(dict.fromkeys(links)), base_rep
+    return layout.mechanism_parts(k.mf, mech)
 
 
 def _pair_needs_angle(k: _Kin, pair, which: int, holders_of: dict) -> bool:
@@ -983,6 +935,26 @@ def _check_reachability(k: _Kin, mechs: list, components: dict) -> None:
         k.add(UNREACHABLE, WARNING, f"{k.label(i)} #{i} is not part of any mechanism: {why}", i)
 
 
+# --------------------------------------------------------------------------- KIN-LINK-NAME
+
+def _check_link_names(k: _Kin, mechs: list) -> None:
+    for m in mechs:
+        _pairs, links, _base = _mechanism_parts(k, m)
+        by_name: dict = {}
+        for link in links:
+            reps = k.link_reps(link)
+            by_name.setdefault(layout.link_name(k.mf, link, reps[0] if reps else None), []).append(link)
+        for name, same in by_name.items():
+            if len(same) < 2:
+                continue
+            same = sorted(same)
+            called = ", ".join(f"'{name} #{x}'" for x in same)
+            for link in same[1:]:
+                k.add(LINK_NAME, WARNING, f"link name {name!r} is also the name of link #{same[0]} of "
+                      f"mechanism #{m}: p105 calls them {called}", link,
+                      "name" if k.mf.string(link, "name") else None)
+
+
 # --------------------------------------------------------------------------- entry points
 
 def check_kinematics(pop) -> list:
@@ -1001,6 +973,7 @@ def check_kinematics(pop) -> list:
     _check_ypr(k, holders)
     _check_placements(k)
     _check_reachability(k, mechs, components)
+    _check_link_names(k, mechs)
     order = {r: n for n, r in enumerate(RULES)}
     return sorted(k.out, key=lambda f: (f.entity if f.entity is not None else -1,
                                         order.get(f.rule, 99), f.attribute or "", f.message))
