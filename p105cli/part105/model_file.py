@@ -233,9 +233,12 @@ class ModelFile:
     def has(self, i, attr) -> bool:
         """``#i`` has attribute ``attr`` (set or not)."""
         try:
-            self.pop.instance(i).get(attr)
+            inst = self.pop.instance(i)
+            if inst.record is None:
+                return False
+            inst.get(attr)
             return True
-        except Exception:  # noqa: BLE001
+        except Exception:  # noqa: BLE001 - no such instance or attribute
             return False
 
     def ref(self, i, attr, *, optional: bool = False, types=None) -> Optional[int]:
