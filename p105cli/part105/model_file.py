@@ -22,6 +22,7 @@ missing unit is an error only when a value of its kind is read.
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Optional
 
 import numpy as np
@@ -137,23 +138,29 @@ class ModelFile:
             self.units, self._scales, self._cache = other.units, other._scales, other._cache
         else:
             self.pop, self.profile = open_population(doc, profile)
-            self.doc = doc
+            self.doc = getattr(self.pop, "doc", doc)
             self.units = UnitReader(self.pop)
             self._scales: dict = {}
             self._cache: dict = {}  # results computed once per file (the layout walk, ...)
+            # the population's model file: every reader given this population shares its walks
+            self.pop._part105_model_file = weakref.ref(self)
         self.schema = self.pop.schema
         self.layout = layout_of(self.profile)
         self.is_lenient = lenient
         self._lenient_view = self if lenient else None
         self._checked_view = None if lenient else self
-        self.source = getattr(doc, "source", None)
+        self.source = getattr(self.doc, "source", None) or getattr(doc, "source", None)
 
     @classmethod
     def of(cls, doc, profile=None, *, lenient: bool = False) -> "ModelFile":
         """``doc`` as a ModelFile (a ModelFile is returned as is, or its lenient view)."""
         if isinstance(doc, ModelFile):
             return doc.lenient() if lenient else doc
-        return cls(doc, profile, lenient=lenient)
+        known = getattr(doc, "_part105_model_file", None)  # a Population a ModelFile was built on
+        mf = known() if known is not None else None
+        if mf is None:
+            return cls(doc, profile, lenient=lenient)
+        return mf.lenient() if lenient else mf.checked()
 
     def lenient(self) -> "ModelFile":
         """The lenient view of this file (same population, same caches)."""
