@@ -25,16 +25,15 @@ import math
 import weakref
 from typing import Optional
 
-import numpy as np
-
-from ..kinematics import placements as pl
-from ..kinematics.model import Units
 from ..schema.units import ANGLE, LENGTH, ContextUnits, UnitReader
 from ..schema.values import number as _num
 from ..schema.values import ref as _ref
 from ..schema.values import untyped as _untyped
 from ..step.errors import ModelError
 from .catalogue import choose_profile, layout_of
+
+# numpy and the kinematics maths are imported where a placement is computed: validating a file
+# (the lenient walk) never needs them
 
 __all__ = ["ModelFile", "ContextScale", "MISSING", "model_error", "open_population"]
 
@@ -120,8 +119,10 @@ class ContextScale:
             self._angle = self._factor(ANGLE)
         return self._angle
 
-    def units(self) -> Units:
+    def units(self) -> "Units":
         """The model's Units of this context (SI for a kind it does not give)."""
+        from ..kinematics.model import Units
+
         lu, au = self.cu.length, self.cu.angle
         return Units(length=float(lu[0]) if lu else 1.0, angle=float(au[0]) if au else 1.0,
                      length_name=lu[1] if lu else "metre", angle_name=au[1] if au else "radian")
@@ -370,9 +371,11 @@ class ModelFile:
         d = self.ref(i, attr, optional=True, types=("direction",))
         return None if d is None else self.vector(d, "direction_ratios")
 
-    def placement(self, i, scale: ContextScale) -> np.ndarray:
+    def placement(self, i, scale: ContextScale) -> "np.ndarray":
         """``#i`` (axis2_placement_3d, su_parameters or cartesian_transformation_operator_3d)
         as a 4x4 transform in metres; lengths and angles in ``scale``'s units."""
+        from ..kinematics import placements as pl
+
         t = self.types(i)
         if "su_parameters" in t and "su_parameters" not in self.schema.entities:
             raise model_error(i, f"su_parameters is not part of the {self._profile_name()} profile; "
@@ -407,8 +410,12 @@ class ModelFile:
         a, alpha, b, beta, c, gamma = (self.number(i, n) for n in ("a", "alpha", "b", "beta", "c", "gamma"))
         return (a * lf, alpha * af, b * lf, beta * af, c * lf, gamma * af)
 
-    def _cto3d(self, i, scale: ContextScale) -> np.ndarray:
+    def _cto3d(self, i, scale: ContextScale) -> "np.ndarray":
         """Part 42 ``cartesian_transformation_operator_3d`` as a rigid 4x4 (scale must be 1)."""
+        import numpy as np
+
+        from ..kinematics import placements as pl
+
         axes = {a: self.direction(i, a) for a in ("axis1", "axis2", "axis3")}
         raw_scale = self.get(i, "scale", None)
         s = _num(raw_scale) if raw_scale is not None else 1.0
@@ -425,8 +432,10 @@ class ModelFile:
         xyz = self.vector(loc, "coordinates")
         return pl.transform(R, [c * scale.length for c in xyz])
 
-    def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> np.ndarray:
+    def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> "np.ndarray":
         """``T_rep2_rep1`` of an item_defined_transformation: ``T(item_2) @ inv(T(item_1))``."""
+        from ..kinematics import placements as pl
+
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
         return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))

@@ -88,3 +88,12 @@ def test_readers_given_one_population_share_one_model_file():
     assert ModelFile.of(pop) is mf and ModelFile.of(pop, lenient=True) is mf.lenient()
     from p105cli.part105 import layout
     assert layout.mechanisms(ModelFile.of(pop)) is layout.mechanisms(mf)
+
+
+def test_the_validator_loads_no_numpy():
+    """The lenient walk needs no placement maths: validate starts without numpy."""
+    import subprocess
+    import sys
+    code = "import sys, p105cli.rules.validate; print('numpy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.stdout.strip() == "False", out.stderr
