@@ -197,7 +197,7 @@ def inverse(T) -> np.ndarray:
     Rt = np.swapaxes(T[..., :3, :3], -1, -2)
     out = np.zeros(T.shape)
     out[..., :3, :3] = Rt
-    out[..., :3, 3] = -(Rt @ T[..., :3, 3:])[..., 0]
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, T[..., :3, 3])
     out[..., 3, 3] = 1.0
     return out
 
