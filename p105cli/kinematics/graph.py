@@ -282,7 +282,8 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
     size = float(mech.size())
     notes = []
 
-    X, T, bad = link_poses(pl, mech.initial_vector(), unsupported="skip")
+    q0 = mech.initial_vector()
+    X, T, bad = link_poses(pl, q0, unsupported="skip")
     X = {ln: X[i] for ln, i in pl.link_index.items()}
     for k in sorted(bad):
         notes.append(f"pair {names[k]!r} ({pairs[k].kind}): no motion available ({bad[k]}), "
@@ -312,7 +313,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
             c.rank, c.redundant_constraints = 0, 0
             c.mobility = dof + (6 if floating else 0)
         elif not (set(cpairs) & set(bad)):
-            _rank_analysis(mech, pl, c, cloops, cpairs, X, T, n, slices, size, col_scale, tol)
+            _rank_analysis(mech, pl, c, cloops, cpairs, q0, X, T, n, slices, size, col_scale, tol)
             worst_closure = max(worst_closure, c.closure_residual)
         components.append(c)
 
@@ -346,7 +347,7 @@ def _rank_rtol(tol, closure):
     return max(tol, min(100.0 * closure, 1e-4))
 
 
-def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, X, T, n, slices, size, col_scale, tol):
+def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, q0, X, T, n, slices, size, col_scale, tol):
     """Rank, mobility, redundant constraints and the joints carrying them, for one component.
 
     The Jacobian is the solver's loop closure (:func:`solver.loop_twists`; the residual's
@@ -356,7 +357,7 @@ def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, X, T, n, slices,
     forward kinematics places it (``X``, ``T``: :func:`solver.link_poses`): for the chord
     from link a to link b, ``T_chord X_b^-1 X_a``, which is ``T_loop``."""
     pairs = mech.pairs
-    Tl, Jt = _loop_twists(pl, mech.initial_vector()[None], loop_ids)
+    Tl, Jt = _loop_twists(pl, q0[None], loop_ids)
     blocks, closure = [], 0.0
     for i, li in enumerate(loop_ids):
         c = pl.loops[li][0][0]

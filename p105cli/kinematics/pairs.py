@@ -29,7 +29,8 @@ Conventions (read these before using any function)
   frame (origin velocity and angular velocity). ``frame="spatial"`` gives
   ``vee(dM/dq_i M^-1)`` (expressed in the first pair frame, linear part the
   velocity of the point of frame 2 passing through frame 1's origin). The
-  two are related by the adjoint of ``M`` (:func:`adjoint`).
+  two are related by the adjoint of ``M`` (:func:`p105cli.kinematics.spatial.adjoint`;
+  ``hat``, ``vee`` and ``adjoint`` live there).
 * :meth:`PairType.motion_derivative` gives ``dM/dq`` as ``(..., n, 4, 4)``
   (``dM/dq_i = M @ hat(J_body[..., :, i])``).
 
@@ -180,7 +181,7 @@ from typing import Callable
 import numpy as np
 
 from .placements import ypr_rotation
-from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform, vee
+from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform
 
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
@@ -198,7 +199,7 @@ class UnsupportedPairError(NotImplementedError):
     """A pair type, or a parameter value, whose motion this module does not define."""
 
 
-# --------------------------------------------------------------------------- twist helpers
+# --------------------------------------------------------------------------- link transform
 
 def link_transform(P1, M, P2) -> np.ndarray:
     """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast)."""

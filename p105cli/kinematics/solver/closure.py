@@ -43,9 +43,11 @@ _JL_MAP = _jl_map()
 _I3 = np.arange(3)
 
 
-def _loop_terms(pl: Plan, li: int, Q, jacobian: bool):
+def _loop_terms(pl: Plan, li: int, Q, jacobian: bool, factors: dict):
     """``T_loop`` (B, 4, 4) of loop ``li`` and, with ``jacobian``, the spatial twists (B, 6, n)
-    of its factors in the loop's start frame and their flat value columns (n,)."""
+    of its factors in the loop's start frame and their flat value columns (n,). ``factors``
+    keeps each pair's oriented transform and left twists for the other loops of this call
+    (a pair on several loops is evaluated once)."""
     B = Q.shape[0]
     lp = pl.loops[li]
     rev = _revolute_loop(pl, li)
@@ -58,12 +60,22 @@ def _loop_terms(pl: Plan, li: int, Q, jacobian: bool):
         T = None
         blocks, idx = [], []
     for k, fwd in lp:
+        M = None
+        if pl.types[k].kind != "revolute" and ((k, fwd) not in factors or jacobian and fwd):
+            # the motion once for the transform and the twists of this pair
+            M = factors.get(("motion", k))
+            if M is None:
+                M = factors[("motion", k)] = pl.types[k].motion(Q[:, pl.slices[k]], **pl.params[k])
         if jacobian:
-            X = left_twists(pl, k, Q, fwd)
+            X = factors.get(("twists", k, fwd))
+            if X is None:
+                X = factors[("twists", k, fwd)] = left_twists(pl, k, Q, fwd, M)
             blocks.append(np.broadcast_to(X, (B,) + X.shape[-2:]) if T is None else adjoint_apply(T, X))
             idx.extend(range(pl.slices[k].start, pl.slices[k].stop))
-        A = pair_transform(pl, k, Q)
-        A = A if fwd else inverse(A)
+        A = factors.get((k, fwd))
+        if A is None:
+            A = pair_transform(pl, k, Q, M)
+            A = factors[(k, fwd)] = A if fwd else inverse(A)
         T = A if T is None else T @ A
     if not (jacobian and idx):
         return T, None, idx
@@ -79,8 +91,9 @@ def closure(pl: Plan, Q, *, jacobian: bool = True):
     B, L = Q.shape[0], len(pl.loops)
     r = np.zeros((B, 6 * L))
     J = np.zeros((B, 6 * L, pl.nv)) if jacobian else None
+    factors = {}
     for li in range(L):
-        T, S, idx = _loop_terms(pl, li, Q, jacobian)
+        T, S, idx = _loop_terms(pl, li, Q, jacobian, factors)
         R, p = T[:, :3, :3], T[:, :3, 3]
         r[:, 6 * li:6 * li + 3] = p / pl.size
         qw, qv = quaternion_parts(R)
@@ -110,8 +123,9 @@ def loop_twists(pl: Plan, Q, loops=None):
     B, L = Q.shape[0], len(loops)
     Tl = np.empty((B, L, 4, 4))
     J = np.zeros((B, 6 * L, pl.nv))
+    factors = {}
     for i, li in enumerate(loops):
-        T, S, idx = _loop_terms(pl, li, Q, True)
+        T, S, idx = _loop_terms(pl, li, Q, True, factors)
         Tl[:, i] = T
         if S is not None:
             J[:, 6 * i:6 * i + 6, idx] = S

@@ -22,8 +22,9 @@ from .plan import Plan
 __all__ = ["pair_transform", "left_twists", "const_twists", "forward", "link_poses"]
 
 
-def pair_transform(pl: Plan, k: int, Q) -> np.ndarray:
-    """(B, 4, 4) ``T_link1_link2`` of pair k for flat values Q (B, nv)."""
+def pair_transform(pl: Plan, k: int, Q, M=None) -> np.ndarray:
+    """(B, 4, 4) ``T_link1_link2`` of pair k for flat values Q (B, nv); ``M`` its motion at Q
+    when the caller has it (any pair but a revolute one)."""
     t, sl = pl.types[k], pl.slices[k]
     if t.kind == "revolute":
         # P1 Rz(q) P2^-1 = C0 + cos q C1 + sin q C2: elementwise, no matrix product (and no
@@ -31,7 +32,8 @@ def pair_transform(pl: Plan, k: int, Q) -> np.ndarray:
         C = _revolute_consts(pl, k)
         q = Q[:, sl.start]
         return C[0] + np.cos(q)[:, None, None] * C[1] + np.sin(q)[:, None, None] * C[2]
-    M = t.motion(Q[:, sl], **pl.params[k])
+    if M is None:
+        M = t.motion(Q[:, sl], **pl.params[k])
     return pl.P1[k] @ M @ pl.P2inv[k]
 
 
@@ -62,15 +64,17 @@ def const_twists(pl: Plan, k: int, fwd: bool):
     return cache[key]
 
 
-def left_twists(pl: Plan, k: int, Q, fwd: bool) -> np.ndarray:
-    """(B, 6, n_k) or (6, n_k): twists of the factor (pair k, forward or backwards) in its left frame."""
+def left_twists(pl: Plan, k: int, Q, fwd: bool, M=None) -> np.ndarray:
+    """(B, 6, n_k) or (6, n_k): twists of the factor (pair k, forward or backwards) in its left
+    frame (``M``: the pair's motion at Q when the caller has it)."""
     X = const_twists(pl, k, fwd)
     if X is not None:
         return X
     t, sl = pl.types[k], pl.slices[k]
     Jb = t.motion_jacobian(Q[:, sl], **pl.params[k])
     if fwd:
-        M = t.motion(Q[:, sl], **pl.params[k])
+        if M is None:
+            M = t.motion(Q[:, sl], **pl.params[k])
         return adjoint(pl.P1[k] @ M) @ Jb
     return -(pl.AdP2[k] @ Jb)
 

@@ -87,9 +87,10 @@ def plan(mech) -> Plan:
         raise SolveError(f"mechanism {mech.name!r}: links {missing} are not connected to the base "
                          f"link {mech.base!r}")
     link_index = {n: i for i, n in enumerate(order)}
+    value_slices = mech.value_slices   # a property that walks every pair: once
     slices, mask = [], []
     for p in mech.pairs:
-        slices.append(mech.value_slices[p.name])
+        slices.append(value_slices[p.name])
         mask.extend(angle_value_mask(p))
     P1 = np.array([p.P1 for p in mech.pairs]).reshape(-1, 4, 4)
     P2 = np.array([p.P2 for p in mech.pairs]).reshape(-1, 4, 4)
