@@ -506,7 +506,7 @@ def test_cli_model_output_validates_and_reads_back(example, sweep, cli, tmp_path
     v = cli("validate", out)
     assert v.returncode == 0, v.stdout.decode()
     # The configurations written into the model are the ones the table reports (file units).
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     from p105cli.kinematics.reader import read_mechanism
     j = cli("solve", src, "--sweep", sweep, "--to", "jsonl")
     conf = [x for x in _records(j.stdout) if x["type"] == "configuration"]
@@ -547,52 +547,6 @@ def test_cli_example_tool_path_on_the_converted_puma(ref, cli, tmp_path):
     # Independent check: the plain DH product of the answers puts the tool on the targets.
     assert np.abs(_dh_product(arm, q) - np.array([x["pose"] for x in targets])).max() < 1e-11
     assert recs[-1]["max_position_error"] < 1e-11 and recs[-1]["max_rotation_error"] < 1e-11
-
-
-# ---------------------------------------------------------------- motion input readers
-
-def test_values_reader_units_columns_and_jsonl():
-    from p105cli.kinematics.motion_io import read_values
-
-    is_angle = lambda key: (key if isinstance(key, str) else key[0]) != "S"  # noqa: E731
-    t, cols = read_values("t,A,S,U[1]\n0,90,10,45\n1,180,20,-45\n", "x.csv", length=1e-3,
-                          angle=math.pi / 180, is_angle=is_angle)
-    assert list(t) == [0.0, 1.0]
-    assert np.allclose(cols["A"], [math.pi / 2, math.pi]) and np.allclose(cols["S"], [0.01, 0.02])
-    assert np.allclose(cols[("U", 1)], [math.pi / 4, -math.pi / 4])
-    t2, cols2 = read_values('{"t": 0, "pairs": {"A": 90, "U": [1, 2]}}\n{"t": 1, "pairs": {"A": 180, "U": [3, 4]}}\n',
-                            "x.jsonl", angle=math.pi / 180, is_angle=lambda k: True)
-    assert list(t2) == [0.0, 1.0] and np.allclose(cols2["A"], cols["A"])
-    assert np.allclose(cols2[("U", 0)], np.radians([1, 3])) and np.allclose(cols2[("U", 1)], np.radians([2, 4]))
-
-
-@pytest.mark.parametrize("text, where", [("A,A\n1,2\n", "x.csv:1:3: column 'A' given twice"),
-                                         ("t\n1\n", "x.csv:1:1: no pair column"),
-                                         ("A\n", "x.csv:2:1: no configuration"),
-                                         ("A\nnan\n", "x.csv:2:1: 'nan' is not a finite number"),
-                                         ('{"t": 0, "pairs": {"A": 1}}\n{"t": 1}\n', "x.csv:2:1:")])
-def test_values_reader_errors_name_the_place(text, where):
-    from p105cli.kinematics.motion_io import MotionInputError, read_values
-
-    with pytest.raises(MotionInputError) as err:
-        read_values(text, "x.csv")
-    assert where in str(err.value)
-
-
-def test_pose_reader_csv_and_jsonl_agree_and_refuse_non_rigid():
-    from p105cli.kinematics.motion_io import MotionInputError, read_poses
-
-    T = compose(rot_z(0.3), trans_x(2.0))
-    row = ",".join(repr(float(x)) for x in T[:3].ravel())
-    head = "t," + ",".join(f"m{i}{j}" for i in range(3) for j in range(4))
-    t1, P1 = read_poses(f"{head}\n0.5,{row}\n", "p.csv", length=1e-3)
-    t2, P2 = read_poses(json.dumps({"t": 0.5, "pose": T.tolist()}) + "\n", "p.jsonl", length=1e-3)
-    assert list(t1) == list(t2) == [0.5]
-    assert np.abs(P1 - P2).max() == 0.0 and abs(P1[0, 0, 3] - 2e-3 * math.cos(0.3)) < 1e-15
-    bad = T.copy()
-    bad[0, 0] = 2.0
-    with pytest.raises(MotionInputError, match="p.jsonl:1:1: the pose is not a rigid placement"):
-        read_poses(json.dumps({"pose": bad.tolist()}) + "\n", "p.jsonl")
 
 
 @pytest.mark.parametrize("args, message", [
@@ -712,26 +666,6 @@ def test_scene_pictures_from_the_cli(tmp_path, cli):
     bad = cli("solve", "--scene", EXAMPLES / "cable_scene.json", "--keypoints", EXAMPLES / "cable_keypoints.jsonl",
               "--plot", tmp_path / "shapes.jpg")
     assert bad.returncode == 2 and b".png or .svg" in bad.stderr
-
-
-def test_value_tables_parse_the_same_fast_and_careful():
-    """Plain numeric tables go through numpy's C parser; anything unusual through the careful
-    one. Both must give the same bits, and errors still name LINE:COL."""
-    from p105cli.kinematics import motion_io
-
-    rng = np.random.default_rng(7)
-    q = rng.normal(size=(200, 3)) * np.array([1e-300, 1.0, 1e200])
-    body = "".join(f"{i},{a!r},{b:.17g},{c!r}\n" for i, (a, b, c) in enumerate(q.tolist()))
-    text = "# a comment\nt,A,B[0],B[1]\n" + body
-    fast_t, fast = motion_io.read_values(text, "x.csv")
-    careful_t, careful = motion_io.read_values(text.replace("\n0,", '\n"0",', 1), "x.csv")  # quotes: careful
-    assert np.array_equal(fast_t, careful_t)
-    for k in fast:
-        assert np.array_equal(fast[k], careful[k])
-    bad = text.split("\n")
-    bad[4] = "2,nan?," + bad[4].split(",", 2)[2]
-    with pytest.raises(motion_io.MotionInputError, match=r"x\.csv:5:3: 'nan\?' is not a number"):
-        motion_io.read_values("\n".join(bad), "x.csv")
 
 
 def test_requests_beyond_double_precision_or_memory_are_usage_errors(cli):

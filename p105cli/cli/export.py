@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, load_document, naming_source, open_output, report_warnings
-from .options import input_argument, output_option, stream_option
+from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
+from .inputs import load_document, naming_source
+from .options import input_argument, output_option, stream_option, to_option
 from ._emit import emit_json, emit_p21
 
 
@@ -26,8 +27,7 @@ def _convert(doc, schema: str, occt_compat: bool):
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
-@click.option("--to", "to", type=click.Choice(["p21", "json"]), default="p21", show_default=True,
-              help="Output format: Part 21 text, or the p105/1 JSON model.")
+@to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
 @click.option("--schema", type=click.Choice(["ap214", "p105", "ap242"]), default=None,
               help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
                    "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "

@@ -6,7 +6,9 @@ import sys
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, copy_to_stdout, diag, open_output, read_input_bytes
+from .contract import EXIT_STATUS_TEXT, ExitCode, copy_to_stdout, diag, open_output
+from .inputs import decode, parse_document, read_input_bytes
+from .options import SCHEMA_HELP_SHORT, inputs_argument, output_to, input_schema
 
 FORMAT_NAMES = ["auto", "text", "json", "jsonl", "sarif", "junit", "github", "gitlab"]
 
@@ -16,11 +18,11 @@ def _check_one(path: str, schema: str | None, timings: bool):
     from p105cli.rules.diagnostics import Diagnostic, RunResult
     from p105cli.rules.validate import validate_document
     from p105cli.schema.profiles import UnknownSchemaError
-    from p105cli.step import StepError, StepSyntaxError, decode_bytes, read_any
+    from p105cli.step import StepError, StepSyntaxError
 
     raw, source = read_input_bytes(path)
     try:
-        doc = read_any(decode_bytes(raw), source)
+        doc = parse_document(decode(raw), source)
         try:
             return validate_document(doc, source, schema, timings), raw
         except UnknownSchemaError:
@@ -39,7 +41,7 @@ def _check_one(path: str, schema: str | None, timings: bool):
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
-@click.argument("inputs", metavar="[FILES|-]...", nargs=-1)
+@inputs_argument
 @click.option("-f", "--format", "fmt", type=click.Choice(FORMAT_NAMES), default="auto", show_default=True,
               help="Report format; auto is github when GITHUB_ACTIONS is set, else text.")
 @click.option("--fail-on", type=click.Choice(["error", "warning", "note"]), default="error", show_default=True,
@@ -49,10 +51,8 @@ def _check_one(path: str, schema: str | None, timings: bool):
               help="Report only rules matching these globs (comma-separated or repeated), e.g. 'SCH-*'.")
 @click.option("--ignore", multiple=True, metavar="PATTERNS",
               help="Do not report rules matching these globs, e.g. 'KIN-UNREACHABLE'.")
-@click.option("--schema", type=click.Choice(["ap214", "ap242", "p105"]), default=None,
-              help="Schema profile; default: chosen from FILE_SCHEMA.")
-@click.option("-o", "--output", metavar="OUT", default=None,
-              help="Write the report to OUT atomically instead of stdout.")
+@input_schema(SCHEMA_HELP_SHORT)
+@output_to("Write the report to OUT atomically instead of stdout.")
 @click.option("--pass", "pass_through", is_flag=True,
               help="If the input passes, copy it unchanged to stdout (the report goes to stderr or -o).")
 @click.option("--list-rules", is_flag=True,
