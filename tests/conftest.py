@@ -58,7 +58,6 @@ def p105(capfdbinary, monkeypatch):
     from p105cli.cli import main
 
     monkeypatch.delenv("CI", raising=False)
-    monkeypatch.chdir(ROOT)
 
     def run(*args, input: bytes | str | None = None):
         if isinstance(input, str):

@@ -342,26 +342,10 @@ def test_inverse_analysis_reports_unreachable_poses(ref):
 FOUR_BAR_STP = EXAMPLES / "four_bar_ap242.stp"
 
 
-class _Run:
-    def __init__(self, returncode, stdout, stderr):
-        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
-
-
 @pytest.fixture
-def cli(capfdbinary, monkeypatch):
-    """Run ``p105 ARGS`` in this process (the start-up cost is paid once per test session)."""
-    import io
-    import sys
-    from p105cli.cli import main
-
-    def run(*args, input=None):
-        if input is not None:
-            data = input.encode() if isinstance(input, str) else input
-            monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data)))
-        code = main([str(a) for a in args])
-        out, err = capfdbinary.readouterr()
-        return _Run(code, out, err)
-    return run
+def cli(p105):
+    """Run ``p105 ARGS`` in this process (conftest.p105)."""
+    return p105
 
 
 def _records(stdout: bytes):

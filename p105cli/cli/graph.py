@@ -37,7 +37,7 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     constraints and the joints that carry them. Exit 1 when the mobility
     cannot be computed (a pair whose motion is not available).
     """
-    check_tol(tol, finite=False)
+    check_tol(tol)  # inf too: it was an internal error in the analysis
     if enrich and to in ("dot", "graphml", "mermaid"):
         raise click.UsageError("--enrich writes a model: use --to p21 or --to json")
     if not enrich and to == "p21":

@@ -74,11 +74,9 @@ def tol_option(default, help: str, metavar: str | None = None):
                         show_default=default is not None, help=help)
 
 
-def check_tol(tol, *, finite: bool = True) -> None:
-    """A usage error unless ``tol`` (if given) is a positive number."""
-    if tol is None:
-        return
-    if not (tol > 0.0 and (math.isfinite(tol) or not finite)):
+def check_tol(tol) -> None:
+    """A usage error unless ``tol`` (if given) is a positive finite number."""
+    if tol is not None and not (tol > 0.0 and math.isfinite(tol)):
         raise click.UsageError("--tol must be a positive number")
 
 
