@@ -8,6 +8,8 @@ by :mod:`p105cli.formats.solve_records` (or into the model); scenes run in :mod:
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings, stderr_is_terminal
@@ -73,9 +75,7 @@ FORMATS = ["model", "jsonl", "csv"]
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
 @output_option
-def solve(model, values, sets, sweeps, path, target_link, target_frame, program, count, step, resulting_paths,
-          tol, max_iter, branch, to, angle_unit, length_unit, mechanism, schema, scene, keypoints, plot, animation,
-          timings, output):
+def solve(**options):
     """Position analysis of a mechanism (Part 21 or p105/1 JSON, sniffed) along a motion.
 
     Forward: the pairs named in --values/--set are driven (without them, the
@@ -86,54 +86,68 @@ def solve(model, values, sets, sweeps, path, target_link, target_frame, program,
     that configuration (status), never silently. Inverse: --path with
     --target-link. Exit 1 when any configuration is not ok.
     """
-    to_given = to is not None
-    to = to or ("jsonl" if scene is not None else "model")
-    _check_outputs(model, scene, to, plot, animation, resulting_paths)
-    check_tol(tol)
-    _check_motion(values, sets, sweeps, path, target_link, program, count, step)
-    want = _check_branch(branch, model, scene, path)
-    if model is None and scene is None:
-        model = "-"
-    stdin_users = [n for n, v in (("MODEL", model), ("--values", values), ("--path", path)) if v == "-"]
+    o = SimpleNamespace(**options)
+    o.to_given = o.to is not None
+    o.to = o.to or ("jsonl" if o.scene is not None else "model")
+    o.want = _check(o)
+    from p105cli.formats.values import ANGLE_UNITS, LENGTH_UNITS
+    o.lf, o.af = LENGTH_UNITS[o.length_unit], ANGLE_UNITS[o.angle_unit]
+    o.pictures = (o.plot, o.animation)
+    o.scene_dict = _load_scene(o.scene) if o.scene is not None else None
+    if o.model is None:
+        return _scene_only(o)
+    doc, mech = _read_model(o.model, o.schema, o.mechanism)
+    if o.scene_dict is None and getattr(doc, "scene", None) is not None:
+        o.to, o.scene_dict, o.scene = _model_scene(doc, o.model, o.to, o.to_given)
+    prog = _program(doc, mech, o.schema, o.count, o.step) if o.program else None
+    pl, motion, blocks = _start(o, doc, mech, prog)
+    requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
+    if _output(o, doc, mech, pl, motion, blocks, requests):
+        raise click.exceptions.Exit(ExitCode.FINDINGS)
+
+
+def _check(o):
+    """The usage errors of the command line, in order; the requested branch invariant."""
+    _check_outputs(o.model, o.scene, o.to, o.plot, o.animation, o.resulting_paths)
+    check_tol(o.tol)
+    _check_motion(o.values, o.sets, o.sweeps, o.path, o.target_link, o.program)
+    _check_sampling(o.program, o.count, o.step)
+    want = _check_branch(o.branch, o.model, o.scene, o.path)
+    if o.model is None and o.scene is None:
+        o.model = "-"
+    stdin_users = [n for n, v in (("MODEL", o.model), ("--values", o.values), ("--path", o.path)) if v == "-"]
     if len(stdin_users) > 1:
         raise click.UsageError(f"only one of {' and '.join(stdin_users)} can read standard input")
-    from p105cli.formats.values import ANGLE_UNITS, LENGTH_UNITS
-    lf, af = LENGTH_UNITS[length_unit], ANGLE_UNITS[angle_unit]
+    return want
 
-    scene_dict = _load_scene(scene) if scene is not None else None
-    doc = mech = None
-    if model is not None:
-        doc, mech = _read_model(model, schema, mechanism)
-        if scene_dict is None and getattr(doc, "scene", None) is not None:
-            to, scene_dict, scene = _model_scene(doc, model, to, to_given)
-    if mech is None:
-        if values is not None or sets or sweeps or path is not None:
-            raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
-        with open_output(output, (scene, keypoints)) as out:
-            ok = _run_scene(scene_dict, scene, keypoints, None, out, (plot, animation))
-        if not ok:
-            raise click.exceptions.Exit(ExitCode.FINDINGS)
-        return
 
-    prog = _program(doc, mech, schema, count, step) if program else None
-    pl, motion, blocks = _start(model, doc, mech, prog, values, sets, sweeps, path, target_link, target_frame,
-                                lf, af, tol, max_iter, branch, want, to)
-    requests = _resulting_paths(mech, pl, resulting_paths, motion) if to == "model" else []
+def _scene_only(o):
+    """A scene without a model: its cables between fixed ends or along key points."""
+    if o.values is not None or o.sets or o.sweeps or o.path is not None:
+        raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
+    with open_output(o.output, (o.scene, o.keypoints)) as out:
+        ok = _run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures)
+    if not ok:
+        raise click.exceptions.Exit(ExitCode.FINDINGS)
+
+
+def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
+    """Every block written (and the scene run on the motion); the warnings. True on findings."""
     from p105cli.formats.solve_records import Table, Tally
     tally = Tally(motion.inverse)
-    placements = [] if scene_dict is not None else None
-    with open_output(output, (model, values, path, scene, keypoints)) as out:
-        table = Table(out, to, mech, pl, inverse=motion.inverse, length=lf, angle=af) if to != "model" else None
+    placements = [] if o.scene_dict is not None else None
+    with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
+        table = None if o.to == "model" else Table(out, o.to, mech, pl, inverse=motion.inverse, length=o.lf,
+                                                   angle=o.af)
         _write(out, table, tally, mech, doc, blocks, motion.t, requests, placements)
-        if to == "jsonl":
-            tally.write_summary(out, mech, lf, af, timings)
-            if scene_dict is not None and not _run_scene(scene_dict, scene, keypoints, placements, out,
-                                                         (plot, animation)):
+        if o.to == "jsonl":
+            tally.write_summary(out, mech, o.lf, o.af, o.timings)
+            if o.scene_dict is not None and not _run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
+                                                           o.pictures):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
-    if tally.failed:
-        raise click.exceptions.Exit(ExitCode.FINDINGS)
+    return tally.failed
 
 
 def _check_outputs(model, scene, to, plot, animation, resulting_paths):
@@ -147,9 +161,8 @@ def _check_outputs(model, scene, to, plot, animation, resulting_paths):
         diag("note", f"--resulting-path is written with --to model only; the {to} output has the link placements")
 
 
-def _check_motion(values, sets, sweeps, path, target_link, program, count, step):
+def _check_motion(values, sets, sweeps, path, target_link, program):
     """Which ways of giving a motion go together."""
-    import math
     forward = values is not None or bool(sets) or bool(sweeps)
     if path is not None and target_link is None:
         raise click.UsageError("--path needs --target-link")
@@ -160,6 +173,10 @@ def _check_motion(values, sets, sweeps, path, target_link, program, count, step)
     if program and (forward or path is not None):
         raise click.UsageError("--program runs the model's own motion: it cannot be combined with --values, "
                                "--set, --sweep or --path")
+
+
+def _check_sampling(program, count, step):
+    import math
     if (count is not None or step is not None) and not program:
         raise click.UsageError("--count and --step sample a motion program: they need --program")
     if count is not None and step is not None:
@@ -206,8 +223,7 @@ def _program(doc, mech, schema, count, step):
         raise InputError(str(err)) from None
 
 
-def _start(model, doc, mech, prog, values, sets, sweeps, path, target_link, target_frame, lf, af, tol, max_iter,
-           branch, want, to):
+def _start(o, doc, mech, prog):
     """``(plan, motion, blocks)``: the analysis started, its first block computed (so that a
     request it cannot honour is a usage error before any output)."""
     from p105cli.formats.text import FormatError
@@ -215,24 +231,24 @@ def _start(model, doc, mech, prog, values, sets, sweeps, path, target_link, targ
     from p105cli.motion.analysis import analyse_motion
     try:
         pl = solver.plan(mech)
-        if want is not None and prog is not None and prog[0] == "path":
-            raise click.UsageError(f"--branch {branch}: the model's program is a prescribed path (inverse "
+        if o.want is not None and prog is not None and prog[0] == "path":
+            raise click.UsageError(f"--branch {o.branch}: the model's program is a prescribed path (inverse "
                                    "analysis): the assembly branch is chosen in forward analysis")
-        motion = _motion(mech, prog, values, sets, sweeps, path, target_link, target_frame, lf, af)
+        motion = _motion(o, mech, prog)
         # Model output needs every configuration at once; the tables stream block by block.
-        blocks = analyse_motion(mech, motion, tol=tol, max_iter=max_iter, pl=pl,
-                                block=None if to == "model" else 4096, branch=want)
+        blocks = analyse_motion(mech, motion, tol=o.tol, max_iter=o.max_iter, pl=pl,
+                                block=None if o.to == "model" else 4096, branch=o.want)
         first = next(blocks)
     except FormatError as err:
         raise InputError(str(err)) from None
     except solver.BranchUndefined as err:
-        raise click.UsageError(f"--branch {branch}: mechanism {mech.name!r}: {err}") from None
+        raise click.UsageError(f"--branch {o.branch}: mechanism {mech.name!r}: {err}") from None
     except solver.SolveError as err:
-        raise InputError(f"{model if not is_stdin(model) else STDIN}: {err}") from None
+        raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
     return pl, motion, _chain(first, blocks)
 
 
-def _motion(mech, prog, values, sets, sweeps, path, target_link, target_frame, lf, af):
+def _motion(o, mech, prog):
     """The motion to analyse: the model's program, the poses of --path, or driven values."""
     from p105cli.motion.analysis import Motion
     if prog is not None and prog[0] == "path":
@@ -240,15 +256,15 @@ def _motion(mech, prog, values, sets, sweeps, path, target_link, target_frame, l
         return Motion(t, poses=poses, link=link, frame=frame, frame_name=frame_name)
     if prog is not None:
         return Motion(prog[1], driven=prog[2])
-    if path is not None:
+    if o.path is not None:
         from p105cli.formats.poses import read_poses
-        text, source = read_text(path)
-        t, poses = read_poses(text, source, length=lf)
-        frame = _target_frame(mech, target_link, target_frame) if target_frame is not None else None
-        return Motion(t, poses=poses, link=target_link, frame=frame, frame_name=target_frame)
+        text, source = read_text(o.path)
+        t, poses = read_poses(text, source, length=o.lf)
+        frame = _target_frame(mech, o.target_link, o.target_frame) if o.target_frame is not None else None
+        return Motion(t, poses=poses, link=o.target_link, frame=frame, frame_name=o.target_frame)
     from p105cli.formats.values import driven_columns
-    t, driven, notes = driven_columns(mech, read_text(values) if values is not None else None, sets, sweeps,
-                                      length=lf, angle=af)
+    t, driven, notes = driven_columns(mech, read_text(o.values) if o.values is not None else None, o.sets,
+                                      o.sweeps, length=o.lf, angle=o.af)
     for note in notes:
         diag("note", note)
     return Motion(t, driven=driven)
