@@ -43,28 +43,13 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     if not enrich and to == "p21":
         raise click.UsageError("--to p21 writes a model: use it with --enrich")
     doc = load_document(input)
-    from p105cli.kinematics.reader import read_mechanisms
-    from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
-    try:
-        profile = profile_for_header(doc.header, schema).name
-    except UnknownSchemaError as err:
-        raise InputError(f"{doc.source}: {err}") from None
-    mechs = read_mechanisms(doc, schema)
-    if mechanism is not None:
-        mechs = [m for m in mechs if m.name == mechanism]
-        if not mechs:
-            raise InputError(f"{doc.source}: no mechanism called {mechanism!r}")
-    from p105cli.kinematics.graph import analyse
+    profile, mechs = _mechanisms(doc, schema, mechanism)
     if enrich:
         return _enrich(doc, mechs, profile, to, input, output, tol)
-    if not mechs:
-        raise InputError(f"{doc.source}: no mechanism in the file")
-    if len(mechs) > 1:
-        names = ", ".join(repr(m.name) for m in mechs)
-        raise click.UsageError(f"{doc.source} has {len(mechs)} mechanisms ({names}): choose one with --mechanism")
-    mech = mechs[0]
-    st = analyse(mech, tol=tol)
+    mech = _the_one(doc, mechs)
     from p105cli.formats.graph import render
+    from p105cli.kinematics.graph import analyse
+    st = analyse(mech, tol=tol)
     text = render(mech, st, to or "json")
     with open_output(output, (input,)) as out:
         out.write(text)
@@ -73,6 +58,31 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     if st.mobility is None:
         return ExitCode.FINDINGS
     return ExitCode.OK
+
+
+def _mechanisms(doc, schema, name):
+    """The profile the model is read as, and its mechanisms (only the one called ``name``)."""
+    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
+    try:
+        profile = profile_for_header(doc.header, schema).name
+    except UnknownSchemaError as err:
+        raise InputError(f"{doc.source}: {err}") from None
+    mechs = read_mechanisms(doc, schema)
+    if name is not None:
+        mechs = [m for m in mechs if m.name == name]
+        if not mechs:
+            raise InputError(f"{doc.source}: no mechanism called {name!r}")
+    return profile, mechs
+
+
+def _the_one(doc, mechs):
+    if not mechs:
+        raise InputError(f"{doc.source}: no mechanism in the file")
+    if len(mechs) > 1:
+        names = ", ".join(repr(m.name) for m in mechs)
+        raise click.UsageError(f"{doc.source} has {len(mechs)} mechanisms ({names}): choose one with --mechanism")
+    return mechs[0]
 
 
 def _enrich(doc, mechs, profile, to, input, output, tol):

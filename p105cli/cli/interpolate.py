@@ -55,15 +55,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     then one {"type": "summary"} record. Exit 1 when the model has nothing
     that can be sampled.
     """
-    given = sum(x is not None and x != () for x in (t_values or None, step, count))
-    if given > 1:
-        raise click.UsageError("give at most one of --t, --step and --count")
-    if to == "csv" and what == "all":
-        raise click.UsageError("--to csv needs --what paths or --what configurations (their columns differ)")
-    if count is not None and count < 1:
-        raise click.BadParameter("must be at least 1", param_hint="--count")
-    if step is not None and not step > 0.0:
-        raise click.BadParameter("must be positive", param_hint="--step")
+    given = _check(t_values, step, count, to, what)
     from p105cli.formats import samples
     from p105cli.motion import sampling
 
@@ -92,3 +84,16 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
         diag("error", f"{source_of(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
+
+def _check(t_values, step, count, to, what) -> int:
+    """The usage errors; how many of --t, --step and --count are given."""
+    given = sum(x is not None and x != () for x in (t_values or None, step, count))
+    if given > 1:
+        raise click.UsageError("give at most one of --t, --step and --count")
+    if to == "csv" and what == "all":
+        raise click.UsageError("--to csv needs --what paths or --what configurations (their columns differ)")
+    if count is not None and count < 1:
+        raise click.BadParameter("must be at least 1", param_hint="--count")
+    if step is not None and not step > 0.0:
+        raise click.BadParameter("must be positive", param_hint="--step")
+    return given
