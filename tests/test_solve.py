@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import EXAMPLES, ROOT, SHARED, run_cli
+from conftest import EXAMPLES, ROOT, SHARED
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.placements import compose, inverse, rot_x, rot_z, su_parameters, trans_x, trans_z
@@ -397,12 +397,12 @@ def test_cli_csv_and_jsonl_agree_and_are_deterministic(cli):
         assert float(row["coupler.m03"]) == rec["links"]["coupler"][0][3]
 
 
-def test_cli_values_from_stdin_with_model_from_file_and_set():
-    r = run_cli("solve", FOUR_BAR_STP, "--values", "-", "--to", "jsonl", input="t,A\n0,0.5\n1,0.6\n")
+def test_cli_values_from_stdin_with_model_from_file_and_set(p105):
+    r = p105("solve", FOUR_BAR_STP, "--values", "-", "--to", "jsonl", input="t,A\n0,0.5\n1,0.6\n")
     assert r.returncode == 0, r.stderr
     conf = [x for x in _records(r.stdout) if x["type"] == "configuration"]
     assert [c["t"] for c in conf] == [0.0, 1.0] and conf[1]["pairs"]["A"] == pytest.approx(0.6, abs=1e-15)
-    s = run_cli("solve", FOUR_BAR_STP, "--set", "A=0.6", "--to", "jsonl")
+    s = p105("solve", FOUR_BAR_STP, "--set", "A=0.6", "--to", "jsonl")
     assert s.returncode == 0, s.stderr
     one = [x for x in _records(s.stdout) if x["type"] == "configuration"]
     assert one[0]["pairs"] == conf[1]["pairs"]
@@ -565,7 +565,7 @@ def test_cli_degrees_and_millimetres_in_and_out(cli):
 
 @pytest.mark.parametrize("key", ["four_bar", "slider_crank"])
 @pytest.mark.parametrize("profile", ["ap214", "ap242"])
-def test_program_runs_the_models_own_motion(key, profile):
+def test_program_runs_the_models_own_motion(p105, key, profile):
     """--program: the 1996 files' configuration sequence drives the actuated pair, the AP242
     files' prescribed path is followed by inverse analysis; either way every pair value
     at the program's nodes is the corpus generator's solved state (its own position solver)."""
@@ -574,7 +574,7 @@ def test_program_runs_the_models_own_motion(key, profile):
     mech = MECHANISMS[key]()
     axis = 0 if profile == "ap242" else 2
     truth = [configuration(mech, d, axis) for d in mech.drives]
-    r = run_cli("solve", ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp", "--program",
+    r = p105("solve", ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp", "--program",
                 "--to", "jsonl", "--no-timings")
     assert r.returncode == 0, r.stderr
     recs = [json.loads(x) for x in r.stdout.decode().splitlines()]
@@ -593,16 +593,16 @@ def test_program_runs_the_models_own_motion(key, profile):
             assert abs(d) < 1e-9, (p.name, got, want)
 
 
-def test_program_sampled_and_refused_without_a_program(tmp_path):
+def test_program_sampled_and_refused_without_a_program(p105, tmp_path):
     f = ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp"
-    r = run_cli("solve", f, "--program", "--count", "5", "--to", "csv")
+    r = p105("solve", f, "--program", "--count", "5", "--to", "csv")
     assert r.returncode == 0, r.stderr
     assert len(r.stdout.decode().splitlines()) == 6
-    r = run_cli("solve", f, "--count", "5")
+    r = p105("solve", f, "--count", "5")
     assert r.returncode == 2 and b"need --program" in r.stderr
     bare = tmp_path / "bare.stp"
     bare.write_text("\n".join(line for line in f.read_text().splitlines() if "KINEMATIC_CONTROL" not in line))
-    r = run_cli("solve", bare, "--program")
+    r = p105("solve", bare, "--program")
     assert r.returncode == 2 and b"no kinematic_control" in r.stderr
 
 

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import csv
 import json
+from typing import TYPE_CHECKING
 
-from p105cli.motion.sampling import SampledModel
+if TYPE_CHECKING:  # the writers only read what the sampler gives
+    from p105cli.motion.sampling import SampledModel
 
 __all__ = ["write_jsonl", "write_csv"]
 
