@@ -6,7 +6,7 @@ import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output
 from .inputs import naming_source, nesting_guard, parse_document, read_text
-from .options import input_argument, output_option, to_option
+from .options import input_argument, output_option, output_schema, to_option
 
 SCHEMAS = ["ap242", "p105", "ap214"]
 TARGETS = ["p21", "json", "dh", "dh-json"]
@@ -104,9 +104,9 @@ def _write_model(text, source, convention, deg, name, schema, to, input, output)
 @click.option("--deg", is_flag=True,
               help="Angles of the table (alpha, theta, revolute offsets and limits) are in degrees, "
                    "in and out; default radians.")
-@click.option("--schema", type=click.Choice(SCHEMAS), default="ap242", show_default=True,
-              help="Schema profile of the model written: AP242 layout, Part 105:1996 layout with "
-                   "su_parameters (p105), or AP214 (pair frames as the equivalent axis2_placement_3d).")
+@output_schema(SCHEMAS, "ap242",
+               help="Schema profile of the model written: AP242 layout, Part 105:1996 layout with "
+                    "su_parameters (p105), or AP214 (pair frames as the equivalent axis2_placement_3d).")
 @to_option(TARGETS, "p21",
            help="Output: the mechanism as Part 21 or p105/1 JSON, or (from a model) its DH table "
                 "as CSV (dh) or JSON with base and tool (dh-json).")

@@ -6,7 +6,7 @@ import click
 
 from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
 from .inputs import load_document, naming_source
-from .options import input_argument, output_option, stream_option, to_option
+from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
 
 
@@ -28,10 +28,10 @@ def _convert(doc, schema: str, occt_compat: bool):
 
 @click.command(epilog=EXIT_STATUS_TEXT)
 @to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
-@click.option("--schema", type=click.Choice(["ap214", "p105", "ap242"]), default=None,
-              help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
-                   "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "
-                   "What the target cannot express is reported on stderr.")
+@output_schema(["ap214", "p105", "ap242"],
+               help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
+                    "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "
+                    "What the target cannot express is reported on stderr.")
 @click.option("--occt-compat", is_flag=True,
               help="With --schema ap242: write what Open CASCADE misreads explicitly (pair freedom "
                    "flags, pair names, state contexts) instead of the standard '*', and leave out "

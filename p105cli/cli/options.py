@@ -61,6 +61,13 @@ def input_schema(help: str = SCHEMA_HELP):
 
 schema_option = input_schema()
 
+
+def output_schema(choices, default=None, help: str | None = None):
+    """``--schema``: the profile a command writes (its layout); the order of ``choices`` is the
+    command's (its default first where it has one)."""
+    return click.option("--schema", type=click.Choice(list(choices)), default=default,
+                        show_default=default is not None, help=help)
+
 mechanism_option = click.option(
     "--mechanism", "mechanism", metavar="NAME", default=None,
     help="Analyse the mechanism called NAME (needed when the file has several).")

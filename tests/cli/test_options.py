@@ -71,3 +71,10 @@ def test_output_is_written_atomically_and_never_over_the_input(p105, tmp_path):
     r = p105("export", copy, "-o", copy)
     assert r.returncode == 2 and b"p105 never overwrites its input" in r.stderr
     assert copy.read_bytes() == FOUR_BAR.read_bytes()
+
+
+@pytest.mark.parametrize("command, choices, default", [("export", ["ap214", "p105", "ap242"], None),
+                                                        ("convert-dh-su", ["ap242", "p105", "ap214"], "ap242")])
+def test_output_schema_option_is_the_layout_written(command, choices, default):
+    o = _option(command, "--schema")
+    assert list(o.type.choices) == choices and o.default == default
