@@ -100,6 +100,20 @@ def _csv(text, source):
     rows = csv_rows(text)
     if not rows:
         raise FormatError(f"{source}:1:1: no pose")
+    width, tcol, idx, body, expected = _csv_layout(rows, source)
+    for line, cells in body:
+        if len(cells) != width:
+            raise FormatError(f"{source}:{line}:1: {len(cells)} fields, {expected}")
+        vals = [number(cell, f"{source}:{line}:{col}") for col, cell in cells]
+        if len(idx) == 16:
+            _bottom_row(vals, idx, cells, f"{source}:{line}")
+        yield line, None if tcol is None else vals[tcol], np.array([vals[i] for i in idx]).reshape(-1, 4), \
+            f"{source}:{line}:1"
+
+
+def _csv_layout(rows, source):
+    """``(columns, t column or None, matrix columns, data rows, what a row must match)`` from
+    the header, or from the first row's width when there is none."""
     hline, first = rows[0]
     labels = [c.strip() for _, c in first]
     if all(_is_number(x) for x in labels):   # no header: the columns by their count
@@ -107,29 +121,23 @@ def _csv(text, source):
             raise FormatError(f"{source}:{hline}:1: {len(labels)} fields; a pose row has 13 (t,m00,...,m23) "
                               "or 17 (to m33), or 12 or 16 without t")
         has_t, k = _BY_COUNT[len(labels)]
-        tcol, idx, body = (0 if has_t else None), list(range(int(has_t), int(has_t) + k)), rows
-        expected = f"line {hline} has {len(labels)}"
-    else:
-        m_labels = [x for x in labels if x != "t"]
-        if m_labels not in (_M12, _M16) or labels.count("t") > 1:
-            raise FormatError(f"{source}:{hline}:1: expected the columns t,m00,m01,...,m23 (or to m33)")
-        tcol = labels.index("t") if "t" in labels else None
-        idx = [labels.index(x) for x in m_labels]
-        body = rows[1:]
-        expected = f"the header has {len(labels)}"
-        if not body:
-            raise FormatError(f"{source}:{hline + 1}:1: no pose after the header")
-    for line, cells in body:
-        if len(cells) != len(labels):
-            raise FormatError(f"{source}:{line}:1: {len(cells)} fields, {expected}")
-        vals = [number(cell, f"{source}:{line}:{col}") for col, cell in cells]
-        if len(idx) == 16:
-            for j, i in enumerate(idx[12:]):
-                if abs(vals[i] - (1.0 if j == 3 else 0.0)) > TOL:
-                    raise FormatError(f"{source}:{line}:{cells[i][0]}: the last row of a pose must be 0 0 0 1 "
-                                      f"(m3{j} is {cells[i][1].strip()})")
-        yield line, None if tcol is None else vals[tcol], np.array([vals[i] for i in idx]).reshape(-1, 4), \
-            f"{source}:{line}:1"
+        idx = list(range(int(has_t), int(has_t) + k))
+        return len(labels), (0 if has_t else None), idx, rows, f"line {hline} has {len(labels)}"
+    m_labels = [x for x in labels if x != "t"]
+    if m_labels not in (_M12, _M16) or labels.count("t") > 1:
+        raise FormatError(f"{source}:{hline}:1: expected the columns t,m00,m01,...,m23 (or to m33)")
+    if len(rows) == 1:
+        raise FormatError(f"{source}:{hline + 1}:1: no pose after the header")
+    tcol = labels.index("t") if "t" in labels else None
+    return len(labels), tcol, [labels.index(x) for x in m_labels], rows[1:], f"the header has {len(labels)}"
+
+
+def _bottom_row(vals, idx, cells, where):
+    """The given bottom row of a 16-column row must be 0 0 0 1; the cell at fault is named."""
+    for j, i in enumerate(idx[12:]):
+        if abs(vals[i] - (1.0 if j == 3 else 0.0)) > TOL:
+            raise FormatError(f"{where}:{cells[i][0]}: the last row of a pose must be 0 0 0 1 "
+                              f"(m3{j} is {cells[i][1].strip()})")
 
 
 def _is_number(cell: str) -> bool:

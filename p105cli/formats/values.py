@@ -235,6 +235,22 @@ def driven_columns(mech, values=None, sets=(), sweeps=(), *, length=1.0, angle=1
     Without any of them: the actuated pairs at their initial values, one configuration.
     ``notes`` are remarks for the user (a driven pair without actuator)."""
     is_angle = angle_checker(mech)
+    t, cols = _columns(values, sets, sweeps, length, angle, is_angle)
+    driven = {}
+    for key, v in cols.items():
+        driven[_driven_key(mech, key, v, is_angle)] = v
+    if not driven:
+        q0 = mech.initial_vector()
+        return t, {p.name: q0[None, mech.value_slices[p.name]] for p in mech.pairs if p.actuated}, []
+    named = {k[0] if isinstance(k, tuple) else k for k in driven}
+    actuators = any(q.actuated for q in mech.pairs)
+    notes = [f"pair {p.name!r} is driven but has no actuator in the model"
+             for p in mech.pairs if p.name in named and not p.actuated and actuators]
+    return t, driven, notes
+
+
+def _columns(values, sets, sweeps, length, angle, is_angle):
+    """``(t, {key: (N,) SI})``: --values or --sweep, and --set held in every configuration."""
     t, cols = None, {}
     if values is not None:
         text, source = values
@@ -247,27 +263,19 @@ def driven_columns(mech, values=None, sets=(), sweeps=(), *, length=1.0, angle=1
         if key in cols:
             raise FormatError(f"--set {key_label(key)}: the pair is in --values too")
         cols[key] = np.full(n, v)
-    driven = {}
-    for key, v in cols.items():
-        # an angle of a million turns has no digits left for its position within the turn
-        if is_angle(key) and np.size(v) and float(np.max(np.abs(v))) > MAX_TURNS * 2.0 * math.pi:
-            raise FormatError(f"{key_label(key)}: an angle of {float(np.max(np.abs(v))):.3g} rad is more than "
-                              f"{MAX_TURNS:.0e} turns: its position within a turn is lost to rounding")
-        if not isinstance(key, tuple) and mech.pair(key).value_count > 1:
-            raise FormatError(f"pair {key!r} has {mech.pair(key).value_count} values: name them "
-                              f"{key}[0], {key}[1], ...")
-        if isinstance(key, tuple) and mech.pair(key[0]).value_count == 1 and key[1] == 0:
-            key = key[0]
-        driven[key] = v
-    notes = []
-    if not driven:
-        q0 = mech.initial_vector()
-        for p in mech.pairs:
-            if p.actuated:
-                driven[p.name] = q0[None, mech.value_slices[p.name]]
-    else:
-        named = {k[0] if isinstance(k, tuple) else k for k in driven}
-        for p in mech.pairs:
-            if p.name in named and not p.actuated and any(q.actuated for q in mech.pairs):
-                notes.append(f"pair {p.name!r} is driven but has no actuator in the model")
-    return t, driven, notes
+    return t, cols
+
+
+def _driven_key(mech, key, v, is_angle):
+    """The key a driven column has for the solver (``name[0]`` of a one-value pair is ``name``);
+    a FormatError for an angle beyond :data:`MAX_TURNS` or a multi-valued pair driven as one."""
+    # an angle of a million turns has no digits left for its position within the turn
+    if is_angle(key) and np.size(v) and float(np.max(np.abs(v))) > MAX_TURNS * 2.0 * math.pi:
+        raise FormatError(f"{key_label(key)}: an angle of {float(np.max(np.abs(v))):.3g} rad is more than "
+                          f"{MAX_TURNS:.0e} turns: its position within a turn is lost to rounding")
+    if not isinstance(key, tuple) and mech.pair(key).value_count > 1:
+        raise FormatError(f"pair {key!r} has {mech.pair(key).value_count} values: name them "
+                          f"{key}[0], {key}[1], ...")
+    if isinstance(key, tuple) and mech.pair(key[0]).value_count == 1 and key[1] == 0:
+        return key[0]
+    return key
