@@ -31,7 +31,8 @@ def load_scene(path) -> dict:
     except (ValueError, OSError) as err:
         raise SceneInputError(f"{path}: {err}") from None
     except RecursionError:   # only the json and toml decoders recurse
-        raise SceneInputError(f"{path}: JSON nested too deeply") from None
+        kind = "TOML" if os.fspath(path).endswith(".toml") else "JSON"
+        raise SceneInputError(f"{path}: {kind} nested too deeply") from None
 
 
 def run(scene, scene_path, keypoints, motion, out, pictures=(None, None), warn=None) -> bool:

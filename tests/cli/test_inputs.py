@@ -81,3 +81,14 @@ def test_source_of_falls_back_to_stdin():
     assert source_of(object()) == "<stdin>"
     Doc.source = "a.stp"
     assert source_of(Doc()) == "a.stp"
+
+
+@pytest.mark.parametrize("name, text", [("deep.json", '{"cables": ' + DEEP + "}"),
+                                        ("deep.toml", "a = " + DEEP + "\n")])
+def test_deeply_nested_scene_names_its_file(p105, tmp_path, name, text):
+    scene = tmp_path / name
+    scene.write_text(text)
+    r = p105("solve", "--scene", scene)
+    assert r.returncode == 2
+    kind = "TOML" if name.endswith(".toml") else "JSON"
+    assert r.stderr.decode() == f"p105: error: {scene}: {kind} nested too deeply\n"
