@@ -59,14 +59,17 @@ def p105(capfdbinary, monkeypatch):
 
     monkeypatch.delenv("CI", raising=False)
 
-    def run(*args, input: bytes | str | None = None):
+    def run(*args, input: bytes | str | None = None, env: dict | None = None):
         if isinstance(input, str):
             input = input.encode("utf-8")
-        monkeypatch.setattr(sys, "stdin", _Stdin(input or b""))
-        capfdbinary.readouterr()
         argv = [str(a) for a in args]
-        code = main(argv)
-        out, err = capfdbinary.readouterr()
+        with monkeypatch.context() as m:
+            m.setattr(sys, "stdin", _Stdin(input or b""))
+            for name, value in (env or {}).items():
+                m.setenv(name, value)
+            capfdbinary.readouterr()
+            code = main(argv)
+            out, err = capfdbinary.readouterr()
         return subprocess.CompletedProcess(["p105", *argv], int(code), out, err)
 
     return run
