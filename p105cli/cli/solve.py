@@ -8,6 +8,7 @@ by :mod:`p105cli.formats.solve_records` (or into the model); scenes run in :mod:
 
 from __future__ import annotations
 
+import itertools
 from types import SimpleNamespace
 
 import click
@@ -133,13 +134,18 @@ def _scene_only(o):
 
 def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
     """Every block written (and the scene run on the motion); the warnings. True on findings."""
-    from p105cli.formats.solve_records import Table, Tally
+    from p105cli.formats.solve_records import Table, Tally, write_blocks
     tally = Tally(motion.inverse)
     placements = [] if o.scene_dict is not None else None
     with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
-        table = None if o.to == "model" else Table(out, o.to, mech, pl, inverse=motion.inverse, length=o.lf,
-                                                   angle=o.af)
-        _write(out, table, tally, mech, doc, blocks, motion.t, requests, placements)
+        if o.to == "model":
+            def write(result, links, t, offset):
+                _write_model(out, mech, result, doc, t, requests)
+        else:
+            table = Table(out, o.to, mech, pl, inverse=motion.inverse, length=o.lf, angle=o.af)
+            table.header()
+            write = table.write
+        write_blocks(blocks, motion.t, write, tally, mech.link_names, placements)
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
             if o.scene_dict is not None and not _run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
@@ -245,7 +251,7 @@ def _start(o, doc, mech, prog):
         raise click.UsageError(f"--branch {o.branch}: mechanism {mech.name!r}: {err}") from None
     except solver.SolveError as err:
         raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
-    return pl, motion, _chain(first, blocks)
+    return pl, motion, itertools.chain([first], blocks)
 
 
 def _motion(o, mech, prog):
@@ -280,32 +286,6 @@ def _target_frame(mech, link_name, frame_name):
         raise InputError(f"link {link_name!r} has no frame {frame_name!r} "
                          f"(frames: {', '.join(link.frames) or 'none'})")
     return link.frames[frame_name]
-
-
-def _chain(first, rest):
-    yield first
-    yield from rest
-
-
-def _write(out, table, tally, mech, doc, blocks, t, requests, placements):
-    """Every block into the table (or the model), the tally and the link placements a scene needs."""
-    if table is not None:
-        table.header()
-    offset = 0
-    for result in blocks:
-        links = result.links()
-        n = result.Q.shape[0]
-        tb = t[offset:offset + n] if t is not None else None
-        tally.add(result, offset)
-        if table is not None:
-            table.write(result, links, tb, offset)
-        else:
-            _write_model(out, mech, result, doc, tb, requests)
-        if placements is not None:
-            index = result.plan.link_index
-            placements += [(float(tb[i]) if tb is not None else float(offset + i),
-                            {name: links[i, index[name]] for name in mech.link_names}) for i in range(n)]
-        offset += n
 
 
 def _resulting_paths(mech, pl, specs, motion):

@@ -19,7 +19,7 @@ import json
 
 import numpy as np
 
-__all__ = ["Table", "Tally"]
+__all__ = ["Table", "Tally", "write_blocks"]
 
 
 def _f(x) -> float:
@@ -193,3 +193,21 @@ class Tally:
         if more > 0:
             out.append(("warning", f"{more} more configurations are not ok"))
         return out
+
+
+def write_blocks(blocks, t, write, tally: Tally, link_names, placements=None) -> None:
+    """Every block of results through ``write(result, links, t, offset)`` (a :class:`Table`'s, or
+    the model's), counted in ``tally``; with a list ``placements``, also ``(t, {link: 4x4})``
+    per configuration (t as given, else the index): the motion a scene follows."""
+    offset = 0
+    for result in blocks:
+        links = result.links()
+        n = result.Q.shape[0]
+        tb = t[offset:offset + n] if t is not None else None
+        tally.add(result, offset)
+        write(result, links, tb, offset)
+        if placements is not None:
+            index = result.plan.link_index
+            placements += [(float(tb[i]) if tb is not None else float(offset + i),
+                            {name: links[i, index[name]] for name in link_names}) for i in range(n)]
+        offset += n
