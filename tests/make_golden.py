@@ -11,8 +11,9 @@ Each case is one ``p105`` command run in-process (``p105cli.cli.main``) from the
 repository root with relative paths, stdin given or empty, stdout and stderr captured;
 ``tests/test_golden_cli.py`` runs the cases again and compares. A case's golden file
 ``tests/data/golden_cli/<id>.json`` (``.json.gz`` when large) holds its arguments,
-stdin, exit status, stderr and stdout. ``stdin`` is ``null`` (empty), or ``"@<id>"``:
-the golden stdout of another case (a pipeline, each stage checked on its own).
+stdin, exit status, stderr and stdout. ``stdin`` is ``null`` (empty), ``"@<id>"``: the
+golden stdout of another case (a pipeline, each stage checked on its own), or ``"<path"``:
+a file of the repository.
 
 Paths into the shared data (``../shared``, or ``$P105_SHARED``) are written
 ``{shared}/...`` in the arguments and in the captured text, so the goldens do not
@@ -64,7 +65,7 @@ _ENV_OFF = ("GITHUB_ACTIONS",)
 class Case:
     id: str
     args: tuple[str, ...]
-    stdin: str | None = None  # None, or "@<case id>"
+    stdin: str | None = None  # None, "@<case id>" (its golden stdout) or "<path" (a file of the repository)
 
     @property
     def needs_shared(self) -> bool:
@@ -167,6 +168,8 @@ def _example_cases() -> list[Case]:
     add("validate-stdin-pass--ex-slider_crank-ap242", "validate", "--pass", "-f", "text",
         stdin="@export-quiet-schema-ap242--ex-slider_crank")
     add("graph-stdin--ex-four_bar_ap242-json", "graph", stdin="@parse--ex-four_bar_ap242")
+    add("validate-pass-enriched--ex-four_bar_ap242", "validate", "--pass", "-f", "text",
+        stdin="@graph-enrich--ex-four_bar_ap242")
 
     # convert-dh-su: both tables, every output and profile
     for schema in ("ap242", "p105", "ap214"):
@@ -193,10 +196,14 @@ def _example_cases() -> list[Case]:
     add("solve-values-mm--ex-slider_crank", "solve", sc, "--sweep", "O=0:360:9", "--angle-unit", "deg",
         "--length-unit", "mm", "--no-timings", "--to", "csv")
     add("solve-sweep-model--ex-slider_crank", "solve", sc, "--sweep", "O=0:1.5:4", "--no-timings")
-    add("solve-values-stdin--ex-four_bar_ap242", "solve", fb, "--values", "-", "--no-timings", "--to", "jsonl",
-        stdin="@solve-values-jsonl--ex-four_bar_ap242")
+    add("solve-values-stdin--ex-four_bar_ap242", "solve", fb, "--values", "-", "--angle-unit", "deg", "--no-timings",
+        "--to", "jsonl", stdin=f"<{crank}")
+    add("fail-solve-values-from-solve-output--ex-four_bar_ap242", "solve", fb, "--values", "-", "--no-timings",
+        "--to", "jsonl", stdin="@solve-values-jsonl--ex-four_bar_ap242")
+    add("parse-stdin--ex-four_bar_ap242", "parse", stdin=f"<{fb}")
     for branch, name in (("initial", "initial"), ("+", "plus"), ("-", "minus")):
-        add(f"solve-branch-{name}--ex-four_bar_ap242", "solve", fb, "--sweep", "A=0:6.283185307179586:25", "--branch", branch, "--no-timings", "--to", "jsonl")
+        add(f"solve-branch-{name}--ex-four_bar_ap242", "solve", fb, "--sweep", "A=0:6.283185307179586:25",
+            "--branch", branch, "--no-timings", "--to", "jsonl")
     add("solve-program-model--ex-four_bar_ap242", "solve", "--program", "--no-timings", fb)
     add("solve-program-count-model--ex-slider_crank", "solve", "--program", "--count", "5", "--no-timings", sc)
     add("solve-program-step--ex-four_bar_ap242", "solve", "--program", "--step", "0.1", "--no-timings", "--to",
@@ -435,8 +442,10 @@ def run_subprocess(argv: list[str], stdin: bytes = b"") -> tuple[int, bytes, str
 def run_case(case: Case, golden_stdout_of, runner=run_in_process) -> dict:
     """Run ``case``; ``golden_stdout_of(id)`` gives a stdin named ``@id``."""
     stdin = b""
-    if case.stdin is not None:
+    if case.stdin is not None and case.stdin.startswith("@"):
         stdin = golden_stdout_of(case.stdin[1:]).encode("utf-8")
+    elif case.stdin is not None:
+        stdin = (ROOT / case.stdin[1:]).read_bytes()
     code, stdout, stderr = runner(command_line(case), stdin)
     return {"id": case.id, "args": list(case.args), "stdin": case.stdin, "exit": code,
             "stderr": normalise(stderr), "stdout": normalise(stdout.decode("utf-8"))}
@@ -483,7 +492,7 @@ def main(argv=None) -> int:
                     help="also run every case as a real process and require the same bytes")
     ap.add_argument("--only", metavar="SUBSTRING", help="only the cases whose id contains SUBSTRING")
     ap.add_argument("--times", type=int, default=0, metavar="N",
-                    help="print the N slowest cases and the time per kind of case (the id before '--')")
+                    help="print the N slowest cases and the CPU time per kind of case (the id before '--')")
     args = ap.parse_args(argv)
 
     all_cases = cases()
@@ -499,11 +508,11 @@ def main(argv=None) -> int:
     refused, differ, mismatched, slow = [], [], [], []
     times: dict[str, float] = {}
     DATA.mkdir(parents=True, exist_ok=True)
-    t_all = time.perf_counter()
+    t_all = time.process_time()
     for case in todo:
-        t0 = time.perf_counter()
+        t0 = time.process_time()  # CPU time: the machine may be shared
         r = run_case(case, stdout_of)
-        dt = time.perf_counter() - t0
+        dt = time.process_time() - t0
         times[case.id] = dt
         if dt > 1.0:
             slow.append((case.id, dt))
@@ -530,7 +539,7 @@ def main(argv=None) -> int:
         for p in DATA.glob("*.json*"):
             if p.name.split(".json")[0] not in keep:
                 p.unlink()
-    print(f"{len(results)} cases in {time.perf_counter() - t_all:.1f} s; refused (exit 3): {len(refused)}; "
+    print(f"{len(results)} cases in {time.process_time() - t_all:.1f} s CPU; refused (exit 3): {len(refused)}; "
           f"slow (> 1 s): {', '.join(f'{i} {t:.1f} s' for i, t in slow) or 'none'}")
     if args.times:
         for i, t in sorted(times.items(), key=lambda x: -x[1])[:args.times]:

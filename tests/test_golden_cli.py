@@ -70,13 +70,14 @@ def line_difference(expected: str, actual: str) -> str | None:
     return None
 
 
-def stdout_difference(expected: str, actual: str) -> str | None:
-    """The first line where ``actual`` differs from ``expected`` (within the tolerance)."""
+def stdout_difference(expected: str, actual: str, exact: bool = EXACT) -> str | None:
+    """The first line where ``actual`` differs from ``expected`` (beyond the tolerance, or at
+    all when ``exact``)."""
     if expected == actual:
         return None
     el, al = expected.split("\n"), actual.split("\n")
     for n, (e, a) in enumerate(zip(el, al), start=1):
-        why = "bytes differ (P105_GOLDEN_EXACT)" if EXACT and e != a else line_difference(e, a)
+        why = "bytes differ (P105_GOLDEN_EXACT)" if exact and e != a else line_difference(e, a)
         if why:
             return f"stdout line {n}: {why}\n  expected: {_clip(e)}\n  actual:   {_clip(a)}"
     if len(el) != len(al):
@@ -163,7 +164,10 @@ def test_comparison_tolerates_last_bits_only():
 
 
 def test_comparison_reports_the_first_differing_line():
-    why = stdout_difference("a\nb 1.5\nc\n", "a\nb 1.6\nc\n")
+    why = stdout_difference("a\nb 1.5\nc\n", "a\nb 1.6\nc\n", exact=False)
     assert why.startswith("stdout line 2: real 1.5 != 1.6")
-    assert stdout_difference("a\n", "a\nb\n").startswith("stdout line 2: text '' != 'b'")
-    assert stdout_difference("a\nb", "a\nb\n") == "stdout has 3 lines, expected 2"
+    assert stdout_difference("a\n", "a\nb\n", exact=False).startswith("stdout line 2: text '' != 'b'")
+    assert stdout_difference("a\nb", "a\nb\n", exact=False) == "stdout has 3 lines, expected 2"
+    assert stdout_difference("x 0.1\n", "x 0.1\n", exact=True) is None
+    assert stdout_difference("x 0.1\n", "x 0.10000000000000002\n", exact=False) is None
+    assert stdout_difference("x 0.1\n", "x 0.10000000000000002\n", exact=True).startswith("stdout line 1: bytes")

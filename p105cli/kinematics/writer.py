@@ -1101,10 +1101,10 @@ class _Conversion:
 
     # -- the conversion
     def run(self):
-        from p105cli.rules.validate import kinematic_entity_names
+        from p105cli.part105.catalogue import KINEMATIC_ENTITIES
 
         recs = self.records
-        kin_names = kinematic_entity_names() - _GEOMETRY_TYPES
+        kin_names = KINEMATIC_ENTITIES - _GEOMETRY_TYPES
         self.kin = {i for i in self.order if self.types[i] & kin_names}
         self.consumed: set = set()
         self.ids = defaultdict(dict)
