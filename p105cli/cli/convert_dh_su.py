@@ -50,7 +50,7 @@ def _model_to_table(text: str, source: str, convention, name):
     """The DH table of the model's serial chain; exit 1 naming the pair that is not a DH row."""
     from p105cli.formats.dh_table import looks_like_dh
     from p105cli.kinematics import dh
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
 
     if convention is None:
         raise click.UsageError("--convention standard|modified is required: say which DH form to write")

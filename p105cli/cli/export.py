@@ -12,7 +12,7 @@ from ._emit import emit_json, emit_p21
 
 def _convert(doc, schema: str, occt_compat: bool):
     """The document converted to ``schema`` (p105cli.kinematics.writer); diagnostics on stderr."""
-    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.kinematics.writer import write_mechanism
 
     with naming_source(doc):

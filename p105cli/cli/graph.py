@@ -62,7 +62,7 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
 
 def _mechanisms(doc, schema, name):
     """The profile the model is read as, and its mechanisms (only the one called ``name``)."""
-    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
     try:
         profile = profile_for_header(doc.header, schema).name

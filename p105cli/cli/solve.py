@@ -201,7 +201,7 @@ def _check_branch(branch, model, scene, path):
 
 
 def _read_model(model, schema, mechanism):
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
     doc = load_document(model)
     report_warnings(doc)
     with naming_source(doc):

@@ -31,7 +31,7 @@ def motion_program(doc, mech, schema, count, step, source, note=None):
 
 
 def _program_of(doc, mech, schema, count, step, source, note):
-    from p105cli.kinematics.reader import population
+    from p105cli.part105.read_mechanism import population
     from p105cli.motion.configurations import sample_configurations
     from p105cli.motion.paths import PathError, sample_path
     from p105cli.motion.sampling import Plan

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from p105cli.kinematics.reader import read_mechanism
+from p105cli.part105.read_mechanism import read_mechanism
 from p105cli.part105.program import ProgramError, motion_program
 from p105cli.step import read_any
 
