@@ -52,7 +52,7 @@ def _program_of(doc, mech, schema, count, step, source, note):
     plan = Plan(step=step, count=count, nodes=step is not None)
     types = pop.instance(prog).types
     if "interpolated_configuration_sequence" in types:
-        from p105cli.motion.reader import read_configuration_sequences
+        from .motion import read_configuration_sequences
         seqs, kinds, _ = read_configuration_sequences(doc, pop=pop)
         seq = next(q for q in seqs if q.id == prog)
         t = plan.grid(seq.t_start, seq.t_end, [n.t for n in seq.nodes])
@@ -67,7 +67,7 @@ def _program_of(doc, mech, schema, count, step, source, note):
             else:
                 driven.update({(name, j): vals[:, j] for j in range(vals.shape[1])})
         return "values", t, driven
-    from p105cli.motion.reader import read_paths
+    from .motion import read_paths
     paths = [p for p in read_paths(doc, pop=pop).paths if p.holder_id == prog]
     if not paths:
         raise ProgramError(f"{source}: #{prog}: the motion program is a "
