@@ -109,9 +109,10 @@ c = [time.process_time()]
 import numpy
 c.append(time.process_time())
 import click
-from p105cli.cli.contract import load_document
+from p105cli.cli.inputs import load_document
 from p105cli.kinematics.reader import read_mechanisms
-from p105cli.kinematics.graph import analyse, structure_document
+from p105cli.formats.graph import structure_document
+from p105cli.kinematics.graph import analyse
 c.append(time.process_time())
 doc = load_document(sys.argv[1])
 c.append(time.process_time())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import subprocess
@@ -35,6 +36,43 @@ def run_cli(*args, input: bytes | str | None = None, timeout: float = 60, env=No
         full_env.update(env)
     return subprocess.run([sys.executable, "-m", "p105cli", *map(str, args)], input=input,
                           capture_output=True, timeout=timeout, env=full_env, cwd=ROOT)
+
+
+class _Stdin:
+    """A stand-in for sys.stdin: main() reads ``sys.stdin.buffer``."""
+
+    def __init__(self, data: bytes):
+        self.buffer = io.BytesIO(data)
+
+    def isatty(self) -> bool:
+        return False
+
+
+@pytest.fixture
+def p105(capfdbinary, monkeypatch):
+    """Run the CLI in this process: ``p105(*args, input=...)`` gives a CompletedProcess
+    (returncode, stdout and stderr as bytes) like :func:`run_cli`, without starting an
+    interpreter. Output is captured at the file descriptors, so stdout written with
+    os.write (validate --pass) is seen too. Use run_cli for what needs a real process:
+    pipes, signals, start-up, the exit status the operating system sees."""
+    from p105cli.cli import main
+
+    monkeypatch.delenv("CI", raising=False)
+
+    def run(*args, input: bytes | str | None = None, env: dict | None = None):
+        if isinstance(input, str):
+            input = input.encode("utf-8")
+        argv = [str(a) for a in args]
+        with monkeypatch.context() as m:
+            m.setattr(sys, "stdin", _Stdin(input or b""))
+            for name, value in (env or {}).items():
+                m.setenv(name, value)
+            capfdbinary.readouterr()
+            code = main(argv)
+            out, err = capfdbinary.readouterr()
+        return subprocess.CompletedProcess(["p105", *argv], int(code), out, err)
+
+    return run
 
 
 def same_value(a, b) -> bool:

@@ -101,7 +101,7 @@ def check_json(text: str) -> None:
     except StepError:
         return
     except RecursionError:
-        # Deep JSON: the CLI (contract.load_document) reports it as an input error, exit 2.
+        # Deep JSON: the CLI (inputs.load_document) reports it as an input error, exit 2.
         return
     for writer in (write_step, write_json):
         try:

@@ -19,6 +19,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from conftest import EXAMPLES, SHARED
+from p105cli.formats import dh_table
 from p105cli.kinematics import dh
 from p105cli.kinematics.model import Mechanism, Pair
 from p105cli.kinematics.placements import (
@@ -330,19 +331,19 @@ J6,R,0,0,0,0,0
 
 
 def test_csv_reads_pi_forms_and_matches_the_reference(reference):
-    table = dh.read_csv(PUMA_CSV, "standard", source="puma.csv")
+    table = dh_table.read_csv(PUMA_CSV, "standard", source="puma.csv")
     Q, T_ref = ref_samples(reference["Puma560"])
     assert np.abs(dh.chain_pose(dh.to_mechanism(table), Q) - T_ref).max() <= 1e-12
-    assert dh._number("-2*pi/3") == -2 * math.pi / 3 and dh._number(" 1e-3 ") == 1e-3
+    assert dh_table._number("-2*pi/3") == -2 * math.pi / 3 and dh_table._number(" 1e-3 ") == 1e-3
 
 
 def test_csv_in_degrees_equals_radians():
     deg = PUMA_CSV.replace("pi/2", "90")
-    t_deg = dh.read_csv(deg, "standard", deg=True)
-    t_rad = dh.read_csv(PUMA_CSV, "standard")
+    t_deg = dh_table.read_csv(deg, "standard", deg=True)
+    t_rad = dh_table.read_csv(PUMA_CSV, "standard")
     same_rows(t_rad, t_deg, tol=1e-15)
     # prismatic offsets are lengths: never scaled by --deg
-    t = dh.read_csv("name,type,a,alpha,d,theta,offset,lower,upper\nS,P,0,90,,45,0.2,-0.1,0.3\n",
+    t = dh_table.read_csv("name,type,a,alpha,d,theta,offset,lower,upper\nS,P,0,90,,45,0.2,-0.1,0.3\n",
                     "standard", deg=True)
     j = t.joints[0]
     assert (j.theta, j.offset, j.lower, j.upper) == (math.pi / 4, 0.2, -0.1, 0.3)
@@ -363,8 +364,8 @@ def test_csv_in_degrees_equals_radians():
     ('name,type,a,alpha,d,theta,offset\n"J1,R,0,0,0,0,0\n', "t.csv:2:1:", "unterminated"),
 ])
 def test_bad_csv_names_file_line_and_column(text, where, words):
-    with pytest.raises(dh.DHTableError) as e:
-        dh.read_csv(text, "standard", source="t.csv")
+    with pytest.raises(dh_table.DHTableError) as e:
+        dh_table.read_csv(text, "standard", source="t.csv")
     msg = str(e.value)
     assert msg.startswith(where) and words in msg, msg
 
@@ -373,8 +374,8 @@ def test_quoted_names_round_trip_through_csv():
     table = dh.DHTable("modified", [dh.DHJoint('wrist, "roll"', "R", 0.1, 0.2, d=0.3, offset=-0.4),
                                     dh.DHJoint("slide", "P", 0.0, -0.5, theta=1.0, offset=0.25, upper=1.0)])
     buf = io.StringIO()
-    dh.write_csv(table, buf)
-    back = dh.read_csv(buf.getvalue(), "modified")
+    dh_table.write_csv(table, buf)
+    back = dh_table.read_csv(buf.getvalue(), "modified")
     assert back.joints == table.joints
 
 
@@ -382,43 +383,43 @@ def test_json_table_round_trip_and_errors():
     table = small_arm("modified")
     for deg in (False, True):
         buf = io.StringIO()
-        dh.write_json(table, buf, deg=deg)
-        back = dh.read_json(buf.getvalue(), source="t.json")
+        dh_table.write_json(table, buf, deg=deg)
+        back = dh_table.read_json(buf.getvalue(), source="t.json")
         same_rows(table, back, tol=1e-14)
         np.testing.assert_array_equal(back.base, table.base)
         np.testing.assert_array_equal(back.tool, table.tool)
     text = buf.getvalue()
-    with pytest.raises(dh.DHTableError, match=r"^t.json:/convention: the file says convention 'modified'"):
-        dh.read_json(text, "standard", source="t.json")
+    with pytest.raises(dh_table.DHTableError, match=r"^t.json:/convention: the file says convention 'modified'"):
+        dh_table.read_json(text, "standard", source="t.json")
     obj = json.loads(text)
     del obj["convention"]
-    with pytest.raises(dh.DHTableError, match="no DH convention"):
-        dh.read_json(json.dumps(obj), None, source="t.json")
-    assert dh.read_json(json.dumps(obj), "modified").convention == "modified"
+    with pytest.raises(dh_table.DHTableError, match="no DH convention"):
+        dh_table.read_json(json.dumps(obj), None, source="t.json")
+    assert dh_table.read_json(json.dumps(obj), "modified").convention == "modified"
     obj["tool"][0][0] = 2.0
-    with pytest.raises(dh.DHTableError, match=r"^t.json:/tool: not a rigid transform"):
-        dh.read_json(json.dumps(obj), "modified", source="t.json")
+    with pytest.raises(dh_table.DHTableError, match=r"^t.json:/tool: not a rigid transform"):
+        dh_table.read_json(json.dumps(obj), "modified", source="t.json")
     obj = json.loads(text)
     obj["joints"][2]["alpha"] = "abc"
-    with pytest.raises(dh.DHTableError, match=r"^t.json:/joints/2/alpha: joint 'J3': alpha: 'abc'"):
-        dh.read_json(json.dumps(obj), source="t.json")
+    with pytest.raises(dh_table.DHTableError, match=r"^t.json:/joints/2/alpha: joint 'J3': alpha: 'abc'"):
+        dh_table.read_json(json.dumps(obj), source="t.json")
 
 
 def test_looks_like_dh():
-    assert dh.looks_like_dh(PUMA_CSV) == "csv"
-    assert dh.looks_like_dh("# comment\n\nName,Type,a\n") == "csv"
-    assert dh.looks_like_dh('{"joints": []}') == "json"
-    assert dh.looks_like_dh('{"format": "p105/1", "data": []}') is None
-    assert dh.looks_like_dh("hello world") is None
-    assert dh.looks_like_dh("ISO-10303-21;\nHEADER;") is None
+    assert dh_table.looks_like_dh(PUMA_CSV) == "csv"
+    assert dh_table.looks_like_dh("# comment\n\nName,Type,a\n") == "csv"
+    assert dh_table.looks_like_dh('{"joints": []}') == "json"
+    assert dh_table.looks_like_dh('{"format": "p105/1", "data": []}') is None
+    assert dh_table.looks_like_dh("hello world") is None
+    assert dh_table.looks_like_dh("ISO-10303-21;\nHEADER;") is None
 
 
 def test_examples_are_the_reference_arms(reference):
-    puma = dh.read_csv((EXAMPLES / "puma560_dh.csv").read_text(), "standard")
+    puma = dh_table.read_csv((EXAMPLES / "puma560_dh.csv").read_text(), "standard")
     Q, T_ref = ref_samples(reference["Puma560"])
     assert np.abs(dh.chain_pose(dh.to_mechanism(puma), Q) - T_ref).max() <= 1e-12
     assert all(j.lower is not None and j.lower <= 0.0 <= j.upper for j in puma.joints)
-    panda = dh.read_json((EXAMPLES / "panda_dh.json").read_text())
+    panda = dh_table.read_json((EXAMPLES / "panda_dh.json").read_text())
     Q, T_ref = ref_samples(reference["Panda"])
     assert panda.convention == "modified"
     assert np.abs(dh.chain_pose(dh.to_mechanism(panda), Q) - T_ref).max() <= 1e-12
@@ -446,7 +447,7 @@ def test_converted_files_validate_clean_and_reproduce_the_reference_poses(refere
     table = ref_table(arm, name)
     src = tmp_path / f"{name}.json"
     with open(src, "w") as fh:
-        dh.write_json(table, fh)
+        dh_table.write_json(table, fh)
     Q, T_ref = ref_samples(arm)
     for schema in ("ap242", "p105", "ap214"):
         out = tmp_path / f"{name}_{schema}.stp"
@@ -462,7 +463,7 @@ def test_converted_files_validate_clean_and_reproduce_the_reference_poses(refere
         back = tmp_path / "back.json"
         assert _cli("convert-dh-su", "--convention", table.convention, "--to", "dh-json", out,
                     "-o", back) == 0
-        again = dh.read_json(back.read_text())
+        again = dh_table.read_json(back.read_text())
         same_rows(table, again, tol=1e-12)
         np.testing.assert_allclose(again.tool, table.tool, atol=1e-15)
     assert capsys.readouterr().err == ""
@@ -482,7 +483,7 @@ def test_cli_prismatic_arm_through_the_file_and_back_to_dh_csv(convention, schem
     src = tmp_path / "rprp.json"
     table = small_arm(convention)
     with open(src, "w") as fh:
-        dh.write_json(table, fh)
+        dh_table.write_json(table, fh)
     out = tmp_path / "m.stp"
     assert _cli("convert-dh-su", "--schema", schema, src, "-o", out) == 0
     assert _cli("validate", "--schema", schema, out, "-o", tmp_path / "report.txt") == 0
@@ -491,7 +492,7 @@ def test_cli_prismatic_arm_through_the_file_and_back_to_dh_csv(convention, schem
     assert _cli("convert-dh-su", "--convention", convention, "--to", "dh", out, "-o", tmp_path / "t.csv") == 0
     err = capsys.readouterr().err
     assert "CSV cannot hold it" in err                # base and tool are not identities
-    back = dh.read_csv((tmp_path / "t.csv").read_text(), convention)
+    back = dh_table.read_csv((tmp_path / "t.csv").read_text(), convention)
     same_rows(table, back)
     for j, k in zip(back.joints, table.joints):
         for x, y in ((j.lower, k.lower), (j.upper, k.upper)):
@@ -505,7 +506,7 @@ def test_cli_deg_equals_radians(tmp_path):
     for line in rad.read_text().splitlines():
         if line.startswith("J"):
             f = line.split(",")
-            f[3] = repr(math.degrees(dh._number(f[3])))
+            f[3] = repr(math.degrees(dh_table._number(f[3])))
             f[7], f[8] = (repr(math.degrees(float(x))) for x in f[7:9])
             line = ",".join(f)
         lines.append(line)

@@ -466,7 +466,7 @@ LAYOUTS = ("ap214", "p105", "ap242")
 
 
 def _read(path):
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     from p105cli.kinematics.reader import read_mechanism
     doc = load_document(str(path))
     return doc, read_mechanism(doc)
@@ -521,7 +521,7 @@ def _strip_graph_entities(path):
 
 @pytest.mark.parametrize("name", sorted(CORPUS_TRUTH))
 def test_enrich_ap242_corpus_validates_clean(name):
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     doc = load_document(str(CORPUS_DIR / f"{name}_ap242.stp"))
     out, _ = _enriched(doc)
     assert _validate(out) == []
@@ -573,7 +573,7 @@ def test_enrich_is_idempotent():
 
 
 def test_enrich_refuses_the_1996_layout():
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     from p105cli.kinematics.graph_entities import EnrichError
     doc = load_document(str(CORPUS_DIR / "four_bar_ap214.stp"))
     with pytest.raises(EnrichError, match="AP214"):
@@ -626,7 +626,7 @@ def test_cli_dot_graphml_mermaid(tmp_path):
 
 
 def test_cli_enrich_then_validate(tmp_path):
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     code, text = _cli(tmp_path, "graph", "--enrich", CORPUS_DIR / "ur5_arm_ap242.stp")
     assert code == 0
     (tmp_path / "e.stp").write_text(text)

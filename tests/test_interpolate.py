@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT
 
 FOUR_BAR = ROOT / "tests" / "data" / "corpus" / "four_bar_ap242.stp"
 
@@ -34,9 +34,9 @@ def axis2(text: str, pid: int, scale=1e-3) -> np.ndarray:
     return T
 
 
-def test_nodes_of_the_corpus_path_are_the_files_placements():
+def test_nodes_of_the_corpus_path_are_the_files_placements(p105):
     text = FOUR_BAR.read_text()
-    r = run_cli("interpolate", "--what", "paths", FOUR_BAR)
+    r = p105("interpolate", "--what", "paths", FOUR_BAR)
     assert r.returncode == 0, r.stderr
     recs = records(r.stdout)
     frames = [x for x in recs if x["type"] == "frame"]
@@ -61,9 +61,9 @@ def edited(tmp_path):
     return f, text
 
 
-def test_linear_and_circular_segments(edited):
+def test_linear_and_circular_segments(p105, edited):
     f, text = edited
-    r = run_cli("interpolate", "--what", "paths", "--count", "201", "--quaternion", "xyzw", f)
+    r = p105("interpolate", "--what", "paths", "--count", "201", "--quaternion", "xyzw", f)
     assert r.returncode == 0, r.stderr
     frames = [x for x in records(r.stdout) if x["type"] == "frame"]
     T = np.array([x["matrix"] for x in frames])
@@ -91,11 +91,11 @@ def test_linear_and_circular_segments(edited):
     assert (q[:, 3] >= 0).all()
 
 
-def test_csv_output_matches_jsonl(edited):
+def test_csv_output_matches_jsonl(p105, edited):
     f, _ = edited
-    js = [x for x in records(run_cli("interpolate", "--what", "paths", "--step", "0.1", f).stdout)
+    js = [x for x in records(p105("interpolate", "--what", "paths", "--step", "0.1", f).stdout)
           if x["type"] == "frame"]
-    r = run_cli("interpolate", "--what", "paths", "--step", "0.1", "--to", "csv", f)
+    r = p105("interpolate", "--what", "paths", "--step", "0.1", "--to", "csv", f)
     assert r.returncode == 0, r.stderr
     rows = list(csv.DictReader(io.StringIO(r.stdout.decode())))
     assert len(rows) == len(js) == 11
@@ -105,37 +105,37 @@ def test_csv_output_matches_jsonl(edited):
             [v for r_ in rec["matrix"][:3] for v in r_]
 
 
-def test_bad_requests(edited):
+def test_bad_requests(p105, edited):
     f, _ = edited
-    r = run_cli("interpolate", "--what", "paths", "--t", "2.0", f)
+    r = p105("interpolate", "--what", "paths", "--t", "2.0", f)
     assert r.returncode == 2 and b"outside its range" in r.stderr and r.stdout == b""
-    r = run_cli("interpolate", "--path", "nope", f)
+    r = p105("interpolate", "--path", "nope", f)
     assert r.returncode == 2 and b"no path named 'nope'" in r.stderr
-    r = run_cli("interpolate", "--step", "0.1", "--count", "3", f)
+    r = p105("interpolate", "--step", "0.1", "--count", "3", f)
     assert r.returncode == 2 and b"at most one of" in r.stderr
-    r = run_cli("interpolate", "--to", "csv", f)
+    r = p105("interpolate", "--to", "csv", f)
     assert r.returncode == 2 and b"--what paths" in r.stderr
 
 
-def test_degenerate_circle_names_the_segment(tmp_path):
+def test_degenerate_circle_names_the_segment(p105, tmp_path):
     text = FOUR_BAR.read_text().replace(
         "#241=POINT_TO_POINT_PATH(1.,*,#240);",
         "#241=CIRCULAR_PATH(1.,.CONTINUOUS.,#240,#900);\n#900=CARTESIAN_POINT('via',(125.35098721641174,"
         "157.66974346320953,0.));")
     f = tmp_path / "bad.stp"
     f.write_text(text)
-    r = run_cli("interpolate", "--what", "paths", f)
+    r = p105("interpolate", "--what", "paths", f)
     assert r.returncode == 2 and b"#241" in r.stderr and b"collinear or coincident" in r.stderr
     assert b"Traceback" not in r.stderr
 
 
-def test_1996_paths_have_no_geometry_and_say_so():
-    r = run_cli("interpolate", "--what", "paths", ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp")
+def test_1996_paths_have_no_geometry_and_say_so(p105):
+    r = p105("interpolate", "--what", "paths", ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp")
     assert r.returncode == 1
     assert b"#227" in r.stderr and b"without geometry" in r.stderr
 
 
-def test_curve_based_segment_on_a_circle_entity(tmp_path):
+def test_curve_based_segment_on_a_circle_entity(p105, tmp_path):
     """A curve_based_path on a Part 42 circle through both nodes (centre solved here)."""
     text = FOUR_BAR.read_text()
     T1, T2 = axis2(text, 235), axis2(text, 240)
@@ -153,7 +153,7 @@ def test_curve_based_segment_on_a_circle_entity(tmp_path):
                         f"#901=CIRCLE('',#904,{rad!r});")
     f = tmp_path / "curve.stp"
     f.write_text(text)
-    r = run_cli("interpolate", "--what", "paths", "--count", "51", f)
+    r = p105("interpolate", "--what", "paths", "--count", "51", f)
     assert r.returncode == 0, r.stderr
     frames = [x for x in records(r.stdout) if x["type"] == "frame"]
     T = np.array([x["matrix"] for x in frames])
@@ -168,7 +168,7 @@ def test_curve_based_segment_on_a_circle_entity(tmp_path):
 
 @pytest.mark.parametrize("profile", ["ap214", "ap242"])
 @pytest.mark.parametrize("key", ["four_bar", "slider_crank"])
-def test_configuration_sequences_against_the_corpus_solver(key, profile):
+def test_configuration_sequences_against_the_corpus_solver(p105, key, profile):
     """The motion program's configurations are the corpus generator's solved states
     (computed here from its own position solver), linearly interpolated between them."""
     from p105cli.corpus import MECHANISMS, configuration
@@ -186,7 +186,7 @@ def test_configuration_sequences_against_the_corpus_solver(key, profile):
         return out
 
     f = ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp"
-    r = run_cli("interpolate", "--what", "configurations", "--t", "0", "--t", "0.25", "--t", "0.5",
+    r = p105("interpolate", "--what", "configurations", "--t", "0", "--t", "0.25", "--t", "0.5",
                 "--t", "1", "--no-nodes", f)
     assert r.returncode == 0, r.stderr
     recs = [x for x in records(r.stdout) if x["type"] == "configuration"]

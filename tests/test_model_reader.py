@@ -795,7 +795,7 @@ def test_ap242_generic_low_order_pair_reads_its_flags_and_six_values():
 @pytest.mark.parametrize("profile", ("ap214", "ap242"))
 def test_part21_file_and_json_model_read_the_same(profile):
     """load_document gives a lazily decoded StepFile for Part 21: the same model as the JSON model."""
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     path = CORPUS_DIR / f"gear_train_{profile}.stp"
     m = read_mechanism(load_document(str(path)))
     ref = _model("gear_train", profile)
@@ -813,7 +813,7 @@ def test_shared_probes_and_examples_read():
     """The hand-written probes of the shared corpus (AP242 with the standard '*' and with Open
     CASCADE's explicit values; a 1996 fragment without a mechanism) and the shipped examples."""
     from conftest import corpus_files
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     files = {p.name: p for p in corpus_files() if p.stat().st_size < 1_000_000}
     assert "four_bar_ap242.stp" in files
     for name, path in files.items():

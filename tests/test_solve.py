@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import EXAMPLES, ROOT, SHARED, run_cli
+from conftest import EXAMPLES, ROOT, SHARED
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.placements import compose, inverse, rot_x, rot_z, su_parameters, trans_x, trans_z
@@ -342,26 +342,10 @@ def test_inverse_analysis_reports_unreachable_poses(ref):
 FOUR_BAR_STP = EXAMPLES / "four_bar_ap242.stp"
 
 
-class _Run:
-    def __init__(self, returncode, stdout, stderr):
-        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
-
-
 @pytest.fixture
-def cli(capfdbinary, monkeypatch):
-    """Run ``p105 ARGS`` in this process (the start-up cost is paid once per test session)."""
-    import io
-    import sys
-    from p105cli.cli import main
-
-    def run(*args, input=None):
-        if input is not None:
-            data = input.encode() if isinstance(input, str) else input
-            monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data)))
-        code = main([str(a) for a in args])
-        out, err = capfdbinary.readouterr()
-        return _Run(code, out, err)
-    return run
+def cli(p105):
+    """Run ``p105 ARGS`` in this process (conftest.p105)."""
+    return p105
 
 
 def _records(stdout: bytes):
@@ -413,12 +397,12 @@ def test_cli_csv_and_jsonl_agree_and_are_deterministic(cli):
         assert float(row["coupler.m03"]) == rec["links"]["coupler"][0][3]
 
 
-def test_cli_values_from_stdin_with_model_from_file_and_set():
-    r = run_cli("solve", FOUR_BAR_STP, "--values", "-", "--to", "jsonl", input="t,A\n0,0.5\n1,0.6\n")
+def test_cli_values_from_stdin_with_model_from_file_and_set(p105):
+    r = p105("solve", FOUR_BAR_STP, "--values", "-", "--to", "jsonl", input="t,A\n0,0.5\n1,0.6\n")
     assert r.returncode == 0, r.stderr
     conf = [x for x in _records(r.stdout) if x["type"] == "configuration"]
     assert [c["t"] for c in conf] == [0.0, 1.0] and conf[1]["pairs"]["A"] == pytest.approx(0.6, abs=1e-15)
-    s = run_cli("solve", FOUR_BAR_STP, "--set", "A=0.6", "--to", "jsonl")
+    s = p105("solve", FOUR_BAR_STP, "--set", "A=0.6", "--to", "jsonl")
     assert s.returncode == 0, s.stderr
     one = [x for x in _records(s.stdout) if x["type"] == "configuration"]
     assert one[0]["pairs"] == conf[1]["pairs"]
@@ -506,7 +490,7 @@ def test_cli_model_output_validates_and_reads_back(example, sweep, cli, tmp_path
     v = cli("validate", out)
     assert v.returncode == 0, v.stdout.decode()
     # The configurations written into the model are the ones the table reports (file units).
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     from p105cli.kinematics.reader import read_mechanism
     j = cli("solve", src, "--sweep", sweep, "--to", "jsonl")
     conf = [x for x in _records(j.stdout) if x["type"] == "configuration"]
@@ -549,52 +533,6 @@ def test_cli_example_tool_path_on_the_converted_puma(ref, cli, tmp_path):
     assert recs[-1]["max_position_error"] < 1e-11 and recs[-1]["max_rotation_error"] < 1e-11
 
 
-# ---------------------------------------------------------------- motion input readers
-
-def test_values_reader_units_columns_and_jsonl():
-    from p105cli.kinematics.motion_io import read_values
-
-    is_angle = lambda key: (key if isinstance(key, str) else key[0]) != "S"  # noqa: E731
-    t, cols = read_values("t,A,S,U[1]\n0,90,10,45\n1,180,20,-45\n", "x.csv", length=1e-3,
-                          angle=math.pi / 180, is_angle=is_angle)
-    assert list(t) == [0.0, 1.0]
-    assert np.allclose(cols["A"], [math.pi / 2, math.pi]) and np.allclose(cols["S"], [0.01, 0.02])
-    assert np.allclose(cols[("U", 1)], [math.pi / 4, -math.pi / 4])
-    t2, cols2 = read_values('{"t": 0, "pairs": {"A": 90, "U": [1, 2]}}\n{"t": 1, "pairs": {"A": 180, "U": [3, 4]}}\n',
-                            "x.jsonl", angle=math.pi / 180, is_angle=lambda k: True)
-    assert list(t2) == [0.0, 1.0] and np.allclose(cols2["A"], cols["A"])
-    assert np.allclose(cols2[("U", 0)], np.radians([1, 3])) and np.allclose(cols2[("U", 1)], np.radians([2, 4]))
-
-
-@pytest.mark.parametrize("text, where", [("A,A\n1,2\n", "x.csv:1:3: column 'A' given twice"),
-                                         ("t\n1\n", "x.csv:1:1: no pair column"),
-                                         ("A\n", "x.csv:2:1: no configuration"),
-                                         ("A\nnan\n", "x.csv:2:1: 'nan' is not a finite number"),
-                                         ('{"t": 0, "pairs": {"A": 1}}\n{"t": 1}\n', "x.csv:2:1:")])
-def test_values_reader_errors_name_the_place(text, where):
-    from p105cli.kinematics.motion_io import MotionInputError, read_values
-
-    with pytest.raises(MotionInputError) as err:
-        read_values(text, "x.csv")
-    assert where in str(err.value)
-
-
-def test_pose_reader_csv_and_jsonl_agree_and_refuse_non_rigid():
-    from p105cli.kinematics.motion_io import MotionInputError, read_poses
-
-    T = compose(rot_z(0.3), trans_x(2.0))
-    row = ",".join(repr(float(x)) for x in T[:3].ravel())
-    head = "t," + ",".join(f"m{i}{j}" for i in range(3) for j in range(4))
-    t1, P1 = read_poses(f"{head}\n0.5,{row}\n", "p.csv", length=1e-3)
-    t2, P2 = read_poses(json.dumps({"t": 0.5, "pose": T.tolist()}) + "\n", "p.jsonl", length=1e-3)
-    assert list(t1) == list(t2) == [0.5]
-    assert np.abs(P1 - P2).max() == 0.0 and abs(P1[0, 0, 3] - 2e-3 * math.cos(0.3)) < 1e-15
-    bad = T.copy()
-    bad[0, 0] = 2.0
-    with pytest.raises(MotionInputError, match="p.jsonl:1:1: the pose is not a rigid placement"):
-        read_poses(json.dumps({"pose": bad.tolist()}) + "\n", "p.jsonl")
-
-
 @pytest.mark.parametrize("args, message", [
     (["--path", "x.jsonl"], "--path needs --target-link"),
     (["--values", "-", "--sweep", "A=0:1:2"], "--sweep and --values cannot be combined"),
@@ -627,7 +565,7 @@ def test_cli_degrees_and_millimetres_in_and_out(cli):
 
 @pytest.mark.parametrize("key", ["four_bar", "slider_crank"])
 @pytest.mark.parametrize("profile", ["ap214", "ap242"])
-def test_program_runs_the_models_own_motion(key, profile):
+def test_program_runs_the_models_own_motion(p105, key, profile):
     """--program: the 1996 files' configuration sequence drives the actuated pair, the AP242
     files' prescribed path is followed by inverse analysis; either way every pair value
     at the program's nodes is the corpus generator's solved state (its own position solver)."""
@@ -636,7 +574,7 @@ def test_program_runs_the_models_own_motion(key, profile):
     mech = MECHANISMS[key]()
     axis = 0 if profile == "ap242" else 2
     truth = [configuration(mech, d, axis) for d in mech.drives]
-    r = run_cli("solve", ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp", "--program",
+    r = p105("solve", ROOT / "tests" / "data" / "corpus" / f"{key}_{profile}.stp", "--program",
                 "--to", "jsonl", "--no-timings")
     assert r.returncode == 0, r.stderr
     recs = [json.loads(x) for x in r.stdout.decode().splitlines()]
@@ -655,16 +593,16 @@ def test_program_runs_the_models_own_motion(key, profile):
             assert abs(d) < 1e-9, (p.name, got, want)
 
 
-def test_program_sampled_and_refused_without_a_program(tmp_path):
+def test_program_sampled_and_refused_without_a_program(p105, tmp_path):
     f = ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp"
-    r = run_cli("solve", f, "--program", "--count", "5", "--to", "csv")
+    r = p105("solve", f, "--program", "--count", "5", "--to", "csv")
     assert r.returncode == 0, r.stderr
     assert len(r.stdout.decode().splitlines()) == 6
-    r = run_cli("solve", f, "--count", "5")
+    r = p105("solve", f, "--count", "5")
     assert r.returncode == 2 and b"need --program" in r.stderr
     bare = tmp_path / "bare.stp"
     bare.write_text("\n".join(line for line in f.read_text().splitlines() if "KINEMATIC_CONTROL" not in line))
-    r = run_cli("solve", bare, "--program")
+    r = p105("solve", bare, "--program")
     assert r.returncode == 2 and b"no kinematic_control" in r.stderr
 
 
@@ -712,26 +650,6 @@ def test_scene_pictures_from_the_cli(tmp_path, cli):
     bad = cli("solve", "--scene", EXAMPLES / "cable_scene.json", "--keypoints", EXAMPLES / "cable_keypoints.jsonl",
               "--plot", tmp_path / "shapes.jpg")
     assert bad.returncode == 2 and b".png or .svg" in bad.stderr
-
-
-def test_value_tables_parse_the_same_fast_and_careful():
-    """Plain numeric tables go through numpy's C parser; anything unusual through the careful
-    one. Both must give the same bits, and errors still name LINE:COL."""
-    from p105cli.kinematics import motion_io
-
-    rng = np.random.default_rng(7)
-    q = rng.normal(size=(200, 3)) * np.array([1e-300, 1.0, 1e200])
-    body = "".join(f"{i},{a!r},{b:.17g},{c!r}\n" for i, (a, b, c) in enumerate(q.tolist()))
-    text = "# a comment\nt,A,B[0],B[1]\n" + body
-    fast_t, fast = motion_io.read_values(text, "x.csv")
-    careful_t, careful = motion_io.read_values(text.replace("\n0,", '\n"0",', 1), "x.csv")  # quotes: careful
-    assert np.array_equal(fast_t, careful_t)
-    for k in fast:
-        assert np.array_equal(fast[k], careful[k])
-    bad = text.split("\n")
-    bad[4] = "2,nan?," + bad[4].split(",", 2)[2]
-    with pytest.raises(motion_io.MotionInputError, match=r"x\.csv:5:3: 'nan\?' is not a number"):
-        motion_io.read_values("\n".join(bad), "x.csv")
 
 
 def test_requests_beyond_double_precision_or_memory_are_usage_errors(cli):

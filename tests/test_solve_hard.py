@@ -343,7 +343,7 @@ def test_gear_train_over_twenty_turns_with_redundant_planar_loops():
     # the gears (the column space of the passive Jacobian turns too), one redundant constraint,
     # steps of 4.3 rad. Truth: the pitch circles roll, so each gear turns by -r_in/r_out of its driver.
     from conftest import ROOT
-    from p105cli.cli.contract import load_document
+    from p105cli.cli.inputs import load_document
     from p105cli.kinematics.reader import read_mechanism
 
     mech = read_mechanism(load_document(str(ROOT / "tests" / "data" / "corpus" / "gear_train_ap242.stp")))

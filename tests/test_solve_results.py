@@ -30,21 +30,10 @@ UR5 = ROOT / "tests" / "data" / "corpus" / "ur5_arm_ap242.stp"
 SWEEP = ("--sweep", "A=0.5:2.5:9")
 
 
-class _Run:
-    def __init__(self, returncode, stdout, stderr):
-        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
-
-
 @pytest.fixture
-def cli(capfdbinary):
-    """Run ``p105 ARGS`` in this process."""
-    from p105cli.cli import main
-
-    def run(*args):
-        code = main([str(a) for a in args])
-        out, err = capfdbinary.readouterr()
-        return _Run(code, out, err)
-    return run
+def cli(p105):
+    """Run ``p105 ARGS`` in this process (conftest.p105)."""
+    return p105
 
 
 def _solve(cli, tmp_path, *args):

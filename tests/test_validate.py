@@ -8,7 +8,7 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from conftest import CORPUS, EXAMPLES, ROOT, p21, run_cli
+from conftest import CORPUS, EXAMPLES, ROOT, p21
 
 DATA = ROOT / "tests" / "data"
 GENERATED = sorted((DATA / "corpus").glob("*.stp"))
@@ -19,15 +19,15 @@ def _profile_args(path: Path) -> list[str]:
     return ["--schema", "p105"] if path.stem.endswith("_p105") else []
 
 
-def _diags(path, *extra):
-    r = run_cli("validate", "-f", "json", *extra, path)
+def _diags(p105, path, *extra):
+    r = p105("validate", "-f", "json", *extra, path)
     return r, json.loads(r.stdout)
 
 
 @pytest.mark.parametrize("path", GENERATED + sorted(EXAMPLES.glob("*.stp")),
                          ids=lambda p: p.name)
-def test_generated_corpus_and_examples_validate_clean_with_full_coverage(path):
-    r, report = _diags(path, *_profile_args(path))
+def test_generated_corpus_and_examples_validate_clean_with_full_coverage(p105, path):
+    r, report = _diags(p105, path, *_profile_args(path))
     assert r.returncode == 0, r.stdout.decode()
     assert report["diagnostics"] == []
     summary = report["summary"]
@@ -35,11 +35,11 @@ def test_generated_corpus_and_examples_validate_clean_with_full_coverage(path):
     assert summary["rules_evaluated"] == summary["rules_applicable"]
 
 
-def test_occt_style_probe_reports_the_derived_flags():
+def test_occt_style_probe_reports_the_derived_flags(p105):
     probe = CORPUS / "authored" / "probe_occt_style.stp"
     if not probe.exists():
         pytest.skip("shared corpus not present")
-    r, report = _diags(probe)
+    r, report = _diags(p105, probe)
     assert r.returncode == 1
     derived = {(d["entity"], d["message"].split(":")[0]) for d in report["diagnostics"] if d["rule"] == "SCH-DERIVED"}
     assert {(15, a) for a in ("name", "t_x", "t_y", "t_z", "r_x", "r_y", "r_z")} <= derived
@@ -48,11 +48,11 @@ def test_occt_style_probe_reports_the_derived_flags():
                           "fingerprint"}
 
 
-def test_1996_probe_breaks_kinematic_link_wr2():
+def test_1996_probe_breaks_kinematic_link_wr2(p105):
     probe = CORPUS / "authored" / "probe_p105_1996_ap214.stp"
     if not probe.exists():
         pytest.skip("shared corpus not present")
-    r = run_cli("validate", "-f", "text", probe)
+    r = p105("validate", "-f", "text", probe)
     assert r.returncode == 1
     assert b"error[SCH-kinematic_link.wr2]" in r.stdout and b"(#10 kinematic_link)" in r.stdout
 
@@ -73,59 +73,59 @@ def _broken_four_bar(tmp_path) -> Path:
     return out
 
 
-def test_a_violated_where_rule_is_reported_with_its_long_form_label(tmp_path):
-    r, report = _diags(_broken_four_bar(tmp_path))
+def test_a_violated_where_rule_is_reported_with_its_long_form_label(p105, tmp_path):
+    r, report = _diags(p105, _broken_four_bar(tmp_path))
     assert r.returncode == 1
     rules = {d["rule"] for d in report["diagnostics"]}
     assert "SCH-kinematic_joint.wr1" in rules
 
 
-def test_sarif_output_conforms_to_sarif_2_1_0(tmp_path):
-    r = run_cli("validate", "-f", "sarif", _broken_four_bar(tmp_path))
+def test_sarif_output_conforms_to_sarif_2_1_0(p105, tmp_path):
+    r = p105("validate", "-f", "sarif", _broken_four_bar(tmp_path))
     assert r.returncode == 1
     doc = json.loads(r.stdout)
     jsonschema.Draft4Validator(SARIF_SCHEMA).validate(doc)
     assert any(res["ruleId"] == "SCH-kinematic_joint.wr1" for res in doc["runs"][0]["results"])
 
 
-def test_github_format_is_chosen_automatically_on_actions(tmp_path):
-    r = run_cli("validate", _broken_four_bar(tmp_path), env={"GITHUB_ACTIONS": "true"})
+def test_github_format_is_chosen_automatically_on_actions(p105, tmp_path):
+    r = p105("validate", _broken_four_bar(tmp_path), env={"GITHUB_ACTIONS": "true"})
     assert r.stdout.decode().startswith("::error file=")
 
 
-def test_fail_on_exit_zero_select_and_ignore(tmp_path):
+def test_fail_on_exit_zero_select_and_ignore(p105, tmp_path):
     broken = _broken_four_bar(tmp_path)
-    assert run_cli("validate", "--exit-zero", broken).returncode == 0
-    assert run_cli("validate", "--ignore", "SCH-*", broken).returncode == 0
-    selected = run_cli("validate", "-f", "json", "--select", "SCH-kinematic_joint.*", broken)
+    assert p105("validate", "--exit-zero", broken).returncode == 0
+    assert p105("validate", "--ignore", "SCH-*", broken).returncode == 0
+    selected = p105("validate", "-f", "json", "--select", "SCH-kinematic_joint.*", broken)
     assert {d["rule"] for d in json.loads(selected.stdout)["diagnostics"]} == {"SCH-kinematic_joint.wr1"}
 
 
-def test_pass_copies_a_passing_input_unchanged(tmp_path):
+def test_pass_copies_a_passing_input_unchanged(p105, tmp_path):
     example = EXAMPLES / "four_bar_ap242.stp"
-    r = run_cli("validate", "--pass", "-", input=example.read_bytes())
+    r = p105("validate", "--pass", "-", input=example.read_bytes())
     assert r.returncode == 0 and r.stdout == example.read_bytes()
-    bad = run_cli("validate", "--pass", _broken_four_bar(tmp_path))
+    bad = p105("validate", "--pass", _broken_four_bar(tmp_path))
     assert bad.returncode == 1 and bad.stdout == b"" and b"SCH-kinematic_joint.wr1" in bad.stderr
 
 
-def test_unreadable_and_unknown_schema_are_exit_2_and_several_files_take_the_worst(tmp_path):
+def test_unreadable_and_unknown_schema_are_exit_2_and_several_files_take_the_worst(p105, tmp_path):
     bad_syntax = tmp_path / "bad.stp"
     bad_syntax.write_text(p21("#1=A(1 2);"))
-    r = run_cli("validate", "-f", "json", bad_syntax)
+    r = p105("validate", "-f", "json", bad_syntax)
     assert r.returncode == 2
     (d,) = json.loads(r.stdout)["diagnostics"]
     assert (d["rule"], d["line"], d["column"]) == ("P21-SYNTAX", 8, 8)
     unknown = tmp_path / "unknown.stp"
     unknown.write_text(p21("#1=A(1);"))
-    r = run_cli("validate", unknown)
+    r = p105("validate", unknown)
     assert r.returncode == 2 and b"ap214" in r.stdout and b"ap242" in r.stdout and b"p105" in r.stdout
-    r = run_cli("validate", EXAMPLES / "four_bar_ap242.stp", _broken_four_bar(tmp_path), bad_syntax)
+    r = p105("validate", EXAMPLES / "four_bar_ap242.stp", _broken_four_bar(tmp_path), bad_syntax)
     assert r.returncode == 2
 
 
-def test_list_rules_prints_express_sources():
-    r = run_cli("validate", "--list-rules", "--schema", "ap242")
+def test_list_rules_prints_express_sources(p105):
+    r = p105("validate", "--list-rules", "--schema", "ap242")
     lines = r.stdout.decode().splitlines()
     assert r.returncode == 0
     joint = [line for line in lines if line.startswith("SCH-kinematic_joint.wr1\t")]
@@ -133,30 +133,30 @@ def test_list_rules_prints_express_sources():
     assert any(line.startswith("SCH-ARITY\t") for line in lines)
 
 
-def test_big_real_files_give_no_errors():
+def test_big_real_files_give_no_errors(p105):
     big = sorted((CORPUS / "big").glob("*.step"))[:1]
     if not big:
         pytest.skip("shared corpus not present")
-    r, report = _diags(big[0])
+    r, report = _diags(p105, big[0])
     assert r.returncode == 0
     assert not [d for d in report["diagnostics"] if d["severity"] == "error"]
 
 
-def test_validate_reads_json_models_like_part21():
+def test_validate_reads_json_models_like_part21(p105):
     example = EXAMPLES / "four_bar_ap242.stp"
-    model = run_cli("parse", example).stdout
-    from_json = run_cli("validate", "-f", "json", "-", input=model)
-    from_p21 = run_cli("validate", "-f", "json", "-", input=example.read_bytes())
+    model = p105("parse", example).stdout
+    from_json = p105("validate", "-f", "json", "-", input=model)
+    from_p21 = p105("validate", "-f", "json", "-", input=example.read_bytes())
     assert from_json.returncode == from_p21.returncode == 0
     assert json.loads(from_json.stdout)["summary"]["rules_evaluated"] == \
         json.loads(from_p21.stdout)["summary"]["rules_evaluated"]
-    passed = run_cli("validate", "--pass", "-o", "/dev/null", "-", input=model)
+    passed = p105("validate", "--pass", "-o", "/dev/null", "-", input=model)
     assert passed.stdout == model
 
 
-def test_report_file_is_written_atomically_and_names_syntax_errors(tmp_path):
+def test_report_file_is_written_atomically_and_names_syntax_errors(p105, tmp_path):
     out = tmp_path / "report.json"
-    r = run_cli("validate", "-f", "json", "-o", out, input=p21("#1=A(1);\n#2=B(1 2);"))
+    r = p105("validate", "-f", "json", "-o", out, input=p21("#1=A(1);\n#2=B(1 2);"))
     assert r.returncode == 2 and r.stdout == b""
     (d,) = json.loads(out.read_text())["diagnostics"]
     assert (d["file"], d["line"], d["column"], d["rule"]) == ("<stdin>", 9, 8, "P21-SYNTAX")

@@ -40,9 +40,6 @@ the scene does not call for: a scene without cables imports neither solver.
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import math
 import os
 import time
@@ -51,100 +48,49 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from p105cli.cable.scene import Scene, SceneError, pose_matrix, read_scene, scene_has_cables
+from p105cli.formats.poses import parse_poses
+from p105cli.formats.text import FormatError
+from p105cli.step import decode_bytes
 
 __all__ = ["run_scene", "load_keypoints", "KeypointError", "scene_needs_cables",
            "mirror_solution", "symmetry_plane", "MAX_HALVINGS"]
 
 MAX_HALVINGS = 6
 scene_needs_cables = scene_has_cables
-_CSV_COLUMNS = ["t"] + [f"m{i}{j}" for i in range(3) for j in range(4)]
 
 
-class KeypointError(ValueError):
-    """A key-point file that cannot be read; the message names FILE:LINE."""
+class KeypointError(FormatError):
+    """A key-point file that cannot be read; the message names FILE:LINE:COL."""
 
 
 # --- key points ---------------------------------------------------------------------
 
 def load_keypoints(path) -> list[dict]:
-    """Key points ``[{"t": float, "pose": (4, 4) array}]`` from JSON lines or CSV.
+    """Key points ``[{"t": float, "pose": (4, 4) array, "line": int}]`` from a pose file.
 
-    JSON lines: one ``{"t": t, "pose": 4x4}`` per line (blank lines and lines
-    starting with ``#`` skipped). CSV: ``t,m00,m01,m02,m03,m10,...,m23`` with
-    an optional header row. Poses are in the scene's length unit and in the
+    The file is read by :mod:`p105cli.formats.poses` (JSON Lines ``{"t", "pose"}``
+    or CSV ``t,m00,...,m23``; the format of ``solve --path``): a missing ``t``
+    is the key point's index. Poses are in the scene's length unit and in the
     frame the scene gives for the moving end; they are converted by
-    :func:`run_scene`. Times must not decrease. Errors name ``FILE:LINE``.
+    :func:`run_scene`. Times must not decrease. Errors name ``FILE:LINE:COL``.
     """
     path = os.fspath(path)
     try:
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
+        with open(path, "rb") as fh:
+            text = decode_bytes(fh.read())
     except OSError as err:
         raise KeypointError(f"{path}: cannot read: {err.strerror}") from None
-    except UnicodeDecodeError as err:
-        raise KeypointError(f"{path}: not UTF-8 ({err.reason})") from None
-    first = next((ln.strip() for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
-    rows = _jsonl_rows(path, text) if first.startswith("{") else _csv_rows(path, text)
-    out, last_t = [], -math.inf
-    for line, t, pose in rows:
-        if not (isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)):
-            raise KeypointError(f"{path}:{line}: t must be a finite number")
-        if t < last_t:
-            raise KeypointError(f"{path}:{line}: t = {t:g} goes back in time (previous {last_t:g})")
-        last_t = t
-        try:
-            T = pose_matrix(pose, "pose")
-        except SceneError as err:
-            raise KeypointError(f"{path}:{line}: {err.path}: {err.message}") from None
-        out.append({"t": float(t), "pose": T, "line": line})
-    if not out:
-        raise KeypointError(f"{path}: no key points")
-    return out
-
-
-def _jsonl_rows(path, text):
-    for i, ln in enumerate(text.splitlines(), 1):
-        s = ln.strip()
-        if not s or s.startswith("#"):
-            continue
-        try:
-            rec = json.loads(s)
-        except json.JSONDecodeError as err:
-            raise KeypointError(f"{path}:{i}:{err.colno}: not JSON: {err.msg}") from None
-        if not isinstance(rec, dict) or "t" not in rec or "pose" not in rec:
-            raise KeypointError(f"{path}:{i}: expected an object {{\"t\": t, \"pose\": 4x4}}")
-        yield i, rec["t"], rec["pose"]
-
-
-def _csv_rows(path, text):
-    reader = csv.reader(io.StringIO(text))
-    for i, row in enumerate(reader, 1):
-        cells = [c.strip() for c in row]
-        if not cells or all(not c for c in cells) or cells[0].startswith("#"):
-            continue
-        if cells[0].lower() == "t":
-            if cells != _CSV_COLUMNS:
-                raise KeypointError(f"{path}:{i}: header must be {','.join(_CSV_COLUMNS)}")
-            continue
-        if len(cells) != 13:
-            raise KeypointError(f"{path}:{i}: expected 13 columns (t,m00..m23), got {len(cells)}")
-        try:
-            vals = [float(c) for c in cells]
-        except ValueError:
-            bad = next(c for c in cells if not _is_float(c))
-            raise KeypointError(f"{path}:{i}: not a number: {bad!r}") from None
-        if not all(math.isfinite(v) for v in vals):
-            raise KeypointError(f"{path}:{i}: non-finite value")
-        m = vals[1:]
-        yield i, vals[0], [m[0:4], m[4:8], m[8:12]]
-
-
-def _is_float(c):
     try:
-        float(c)
-        return True
-    except ValueError:
-        return False
+        samples = parse_poses(text, path)
+    except FormatError as err:
+        raise KeypointError(str(err)) from None
+    out, last_t = [], -math.inf
+    for t, T, line in zip(samples.times().tolist(), samples.poses, samples.lines):
+        if t < last_t:
+            raise KeypointError(f"{path}:{line}:1: t = {t:g} goes back in time (previous {last_t:g})")
+        last_t = t
+        out.append({"t": t, "pose": T, "line": line})
+    return out
 
 
 # --- geometry helpers ----------------------------------------------------------------

@@ -1,13 +1,14 @@
 """The contract every p105 subcommand keeps, in one place.
 
 * exit codes (``ExitCode``), and how every failure maps onto them;
-* input: a path or ``-``/nothing for stdin, format sniffed, never modified;
+* input: a path or ``-``/nothing for stdin, format sniffed, never modified
+  (read by :mod:`p105cli.cli.inputs`);
 * output: stdout (data only) or ``-o FILE`` written atomically;
 * diagnostics on stderr: plain text in pipes and CI, rich on a terminal;
   progress bars only on a terminal;
 * a closed pipe ends quietly, Ctrl-C exits 130.
 
-Subcommand modules use these helpers and nothing else for I/O.
+Subcommand modules use these helpers and :mod:`.inputs` and nothing else for I/O.
 """
 
 from __future__ import annotations
@@ -81,56 +82,6 @@ def diag(level: str, message: str) -> None:
                                                     soft_wrap=True)
     else:
         sys.stderr.write(f"p105: {level}: {message}\n")
-
-
-# ---------------------------------------------------------------- input
-
-def read_input_bytes(path: str | None) -> tuple[bytes, str]:
-    """The bytes of ``path`` (``-`` or None: stdin) and the name to report."""
-    if path in (None, "-"):
-        return sys.stdin.buffer.read(), "<stdin>"
-    try:
-        with open(path, "rb") as fh:
-            return fh.read(), path
-    except OSError as err:
-        raise InputError(f"{path}: cannot read: {err.strerror or err}") from None
-
-
-def load_document(path: str | None):
-    """Read a model from a Part 21 or JSON input (sniffed); StepError on bad input."""
-    from p105cli.step import decode_bytes, read_any
-    raw, source = read_input_bytes(path)
-    text = decode_bytes(raw)
-    del raw
-    try:
-        doc = read_any(text, source)
-    except RecursionError:
-        # Only the json module's C decoder recurses (the Part 21 reader and the
-        # model checks are iterative): a JSON text nested deeper than it can go.
-        from p105cli.step import ModelError
-        err = ModelError("JSON nested too deeply")
-        err.source = source
-        raise err from None
-    return doc
-
-
-@contextlib.contextmanager
-def naming_source(doc):
-    """Errors found in a model while analysing it name its file: a ModelError raised
-    deep in the science knows the ``#id`` but not where the model came from. An
-    unknown FILE_SCHEMA is a usage error naming the file too."""
-    from p105cli.schema.profiles import UnknownSchemaError
-    from p105cli.step.errors import StepError
-
-    source = getattr(doc, "source", None) or "<input>"
-    try:
-        yield
-    except StepError as err:
-        if err.source in (None, "<input>"):
-            err.source = source
-        raise
-    except UnknownSchemaError as err:
-        raise InputError(f"{source}: {err}") from None
 
 
 # ---------------------------------------------------------------- output

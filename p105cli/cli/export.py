@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, load_document, naming_source, open_output, report_warnings
-from .options import input_argument, output_option, stream_option
+from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
+from .inputs import load_document, naming_source
+from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
 
 
 def _convert(doc, schema: str, occt_compat: bool):
     """The document converted to ``schema`` (p105cli.kinematics.writer); diagnostics on stderr."""
-    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.kinematics.writer import write_mechanism
 
     with naming_source(doc):
@@ -26,12 +27,11 @@ def _convert(doc, schema: str, occt_compat: bool):
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
-@click.option("--to", "to", type=click.Choice(["p21", "json"]), default="p21", show_default=True,
-              help="Output format: Part 21 text, or the p105/1 JSON model.")
-@click.option("--schema", type=click.Choice(["ap214", "p105", "ap242"]), default=None,
-              help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
-                   "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "
-                   "What the target cannot express is reported on stderr.")
+@to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
+@output_schema(["ap214", "p105", "ap242"],
+               help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
+                    "Part 105:1996 layout, p105 with su_parameters; ap242: the AP242 layout). "
+                    "What the target cannot express is reported on stderr.")
 @click.option("--occt-compat", is_flag=True,
               help="With --schema ap242: write what Open CASCADE misreads explicitly (pair freedom "
                    "flags, pair names, state contexts) instead of the standard '*', and leave out "

@@ -4,26 +4,27 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, load_document, open_output
-from .options import input_argument, output_option
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, open_output
+from .inputs import load_document
+from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_option, output_option, input_schema, \
+    to_option, tol_option
 
+#: graph's analysis formats (p105cli.formats.graph.FORMATS; not imported here: numpy loads lazily)
 GRAPH_FORMATS = ("json", "dot", "graphml", "mermaid")
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
-@click.option("--to", "to", type=click.Choice(GRAPH_FORMATS + ("p21",)), default=None,
-              help="Output format: the analysis as json (default), dot, graphml or mermaid; with --enrich "
-                   "the model as p21 or json (default: the input's format).")
+@to_option(GRAPH_FORMATS + ("p21",),
+           help="Output format: the analysis as json (default), dot, graphml or mermaid; with --enrich "
+                "the model as p21 or json (default: the input's format).")
 @click.option("--enrich", is_flag=True,
               help="Write the model back with the Part 105 graph entities added (AP242 layout: "
                    "kinematic_topology_tree_structure, kinematic_topology_network_structure, kinematic_loop, "
                    "oriented_joint).")
-@click.option("--mechanism", "mechanism", metavar="NAME", default=None,
-              help="Analyse the mechanism called NAME (needed when the file has several).")
-@click.option("--schema", type=click.Choice(["ap214", "ap242", "p105"]), default=None,
-              help="Schema profile; default: chosen from FILE_SCHEMA.")
-@click.option("--tol", type=float, default=None, metavar="RTOL",
-              help="Relative rank tolerance of the loop-closure Jacobian (dimensionless)  [default: 1e-8]")
+@mechanism_option
+@input_schema(SCHEMA_HELP_SHORT)
+@tol_option(None, metavar="RTOL",
+            help="Relative rank tolerance of the loop-closure Jacobian (dimensionless)  [default: 1e-8]")
 @input_argument
 @output_option
 def graph(to, enrich, mechanism, schema, tol, input, output):
@@ -36,35 +37,20 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     constraints and the joints that carry them. Exit 1 when the mobility
     cannot be computed (a pair whose motion is not available).
     """
-    if tol is not None and not tol > 0.0:
-        raise click.UsageError("--tol must be a positive number")
+    check_tol(tol)  # inf too: it was an internal error in the analysis
     if enrich and to in ("dot", "graphml", "mermaid"):
         raise click.UsageError("--enrich writes a model: use --to p21 or --to json")
     if not enrich and to == "p21":
         raise click.UsageError("--to p21 writes a model: use it with --enrich")
     doc = load_document(input)
-    from p105cli.kinematics.reader import read_mechanisms
-    from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
-    try:
-        profile = profile_for_header(doc.header, schema).name
-    except UnknownSchemaError as err:
-        raise InputError(f"{doc.source}: {err}") from None
-    mechs = read_mechanisms(doc, schema)
-    if mechanism is not None:
-        mechs = [m for m in mechs if m.name == mechanism]
-        if not mechs:
-            raise InputError(f"{doc.source}: no mechanism called {mechanism!r}")
-    from p105cli.kinematics.graph import analyse
+    profile, mechs = _mechanisms(doc, schema, mechanism)
     if enrich:
         return _enrich(doc, mechs, profile, to, input, output, tol)
-    if not mechs:
-        raise InputError(f"{doc.source}: no mechanism in the file")
-    if len(mechs) > 1:
-        names = ", ".join(repr(m.name) for m in mechs)
-        raise click.UsageError(f"{doc.source} has {len(mechs)} mechanisms ({names}): choose one with --mechanism")
-    mech = mechs[0]
+    mech = _the_one(doc, mechs)
+    from p105cli.formats.graph import render
+    from p105cli.kinematics.graph import analyse
     st = analyse(mech, tol=tol)
-    text = _render(mech, st, to or "json")
+    text = render(mech, st, to or "json")
     with open_output(output, (input,)) as out:
         out.write(text)
     for note in st.notes:
@@ -74,12 +60,29 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     return ExitCode.OK
 
 
-def _render(mech, st, fmt: str) -> str:
-    from p105cli.kinematics import graph as g
-    if fmt == "json":
-        import json
-        return json.dumps(g.structure_document(mech, st), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    return {"dot": g.to_dot, "graphml": g.to_graphml, "mermaid": g.to_mermaid}[fmt](mech, st)
+def _mechanisms(doc, schema, name):
+    """The profile the model is read as, and its mechanisms (only the one called ``name``)."""
+    from p105cli.part105.read_mechanism import read_mechanisms
+    from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
+    try:
+        profile = profile_for_header(doc.header, schema).name
+    except UnknownSchemaError as err:
+        raise InputError(f"{doc.source}: {err}") from None
+    mechs = read_mechanisms(doc, schema)
+    if name is not None:
+        mechs = [m for m in mechs if m.name == name]
+        if not mechs:
+            raise InputError(f"{doc.source}: no mechanism called {name!r}")
+    return profile, mechs
+
+
+def _the_one(doc, mechs):
+    if not mechs:
+        raise InputError(f"{doc.source}: no mechanism in the file")
+    if len(mechs) > 1:
+        names = ", ".join(repr(m.name) for m in mechs)
+        raise click.UsageError(f"{doc.source} has {len(mechs)} mechanisms ({names}): choose one with --mechanism")
+    return mechs[0]
 
 
 def _enrich(doc, mechs, profile, to, input, output, tol):

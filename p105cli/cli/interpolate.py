@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, load_document, naming_source, open_output, \
-    report_warnings
-from .options import input_argument, output_option, schema_option
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings
+from .inputs import load_document, naming_source, source_of
+from .options import count_option, input_argument, output_option, schema_option, step_option, to_option
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
@@ -19,18 +19,16 @@ from .options import input_argument, output_option, schema_option
               help="Only the configuration sequence(s) of this name (repeatable).")
 @click.option("--t", "t_values", multiple=True, type=float, metavar="T",
               help="Sample at this parameter value (repeatable).")
-@click.option("--step", type=float, default=None, metavar="DT",
-              help="Sample every DT from the start of each path or sequence (its end included).")
-@click.option("--count", type=int, default=None, metavar="N",
-              help="Sample N evenly spaced values over each path or sequence (ends included).")
+@step_option("Sample every DT from the start of each path or sequence (its end included).")
+@count_option("Sample N evenly spaced values over each path or sequence (ends included).")
 @click.option("--nodes/--no-nodes", default=None,
               help="Also sample every node (segment end). Default: on with --step, and when no "
                    "sampling option is given (then only the nodes are sampled).")
 @click.option("--quaternion", type=click.Choice(["wxyz", "xyzw"]), default=None,
               help="Add each frame's rotation as a unit quaternion in this (labelled) order, w >= 0.")
 @click.option("--ypr", is_flag=True, help="Add each frame's rotation as ypr angles (ISO 10303-105 Annex E), radians.")
-@click.option("--to", "to", type=click.Choice(["jsonl", "csv"]), default="jsonl", show_default=True,
-              help="JSON Lines records, or a CSV table (needs --what paths or --what configurations).")
+@to_option(["jsonl", "csv"], "jsonl",
+           help="JSON Lines records, or a CSV table (needs --what paths or --what configurations).")
 @schema_option
 @output_option
 def interpolate(input, what, paths, sequences, t_values, step, count, nodes, quaternion, ypr, to, schema, output):
@@ -57,15 +55,8 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     then one {"type": "summary"} record. Exit 1 when the model has nothing
     that can be sampled.
     """
-    given = sum(x is not None and x != () for x in (t_values or None, step, count))
-    if given > 1:
-        raise click.UsageError("give at most one of --t, --step and --count")
-    if to == "csv" and what == "all":
-        raise click.UsageError("--to csv needs --what paths or --what configurations (their columns differ)")
-    if count is not None and count < 1:
-        raise click.BadParameter("must be at least 1", param_hint="--count")
-    if step is not None and not step > 0.0:
-        raise click.BadParameter("must be positive", param_hint="--step")
+    given = _check(t_values, step, count, to, what)
+    from p105cli.formats import samples
     from p105cli.motion import sampling
 
     doc = load_document(input)
@@ -77,22 +68,32 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
             result = sampling.sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
                                            profile=schema)
     except sampling.SamplingError as err:
-        raise InputError(f"{_source(doc)}: {err}") from None
+        raise InputError(f"{source_of(doc)}: {err}") from None
     for inst, msg in result.skipped:
-        diag("warning", f"{_source(doc)}: #{inst}: {msg}")
+        diag("warning", f"{source_of(doc)}: #{inst}: {msg}")
     try:
         with naming_source(doc), open_output(output, (input,)) as out:
             if to == "jsonl":
-                sampling.write_jsonl(result, out)
+                samples.write_jsonl(result, out)
             else:
-                sampling.write_csv(result, out, what)
+                samples.write_csv(result, out, what)
     except sampling.SamplingError as err:
-        raise InputError(f"{_source(doc)}: {err}") from None
+        raise InputError(f"{source_of(doc)}: {err}") from None
     report_warnings(doc)
     if not result.path_list and not result.sequence_list:
-        diag("error", f"{_source(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
+        diag("error", f"{source_of(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
 
-def _source(doc) -> str:
-    return getattr(doc, "source", None) or "<stdin>"
+def _check(t_values, step, count, to, what) -> int:
+    """The usage errors; how many of --t, --step and --count are given."""
+    given = sum(x is not None and x != () for x in (t_values or None, step, count))
+    if given > 1:
+        raise click.UsageError("give at most one of --t, --step and --count")
+    if to == "csv" and what == "all":
+        raise click.UsageError("--to csv needs --what paths or --what configurations (their columns differ)")
+    if count is not None and count < 1:
+        raise click.BadParameter("must be at least 1", param_hint="--count")
+    if step is not None and not step > 0.0:
+        raise click.BadParameter("must be positive", param_hint="--step")
+    return given

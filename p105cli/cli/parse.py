@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, load_document, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, open_output, report_warnings
+from .inputs import load_document
 from .options import input_argument, output_option, stream_option
 from ._emit import emit_json
 

@@ -6,7 +6,9 @@ import sys
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, copy_to_stdout, diag, open_output, read_input_bytes
+from .contract import EXIT_STATUS_TEXT, ExitCode, copy_to_stdout, diag, open_output
+from .inputs import decode, parse_document, read_input_bytes
+from .options import SCHEMA_HELP_SHORT, inputs_argument, output_to, input_schema
 
 FORMAT_NAMES = ["auto", "text", "json", "jsonl", "sarif", "junit", "github", "gitlab"]
 
@@ -16,11 +18,11 @@ def _check_one(path: str, schema: str | None, timings: bool):
     from p105cli.rules.diagnostics import Diagnostic, RunResult
     from p105cli.rules.validate import validate_document
     from p105cli.schema.profiles import UnknownSchemaError
-    from p105cli.step import StepError, StepSyntaxError, decode_bytes, read_any
+    from p105cli.step import StepError, StepSyntaxError
 
     raw, source = read_input_bytes(path)
     try:
-        doc = read_any(decode_bytes(raw), source)
+        doc = parse_document(decode(raw), source)
         try:
             return validate_document(doc, source, schema, timings), raw
         except UnknownSchemaError:
@@ -39,7 +41,7 @@ def _check_one(path: str, schema: str | None, timings: bool):
 
 
 @click.command(epilog=EXIT_STATUS_TEXT)
-@click.argument("inputs", metavar="[FILES|-]...", nargs=-1)
+@inputs_argument
 @click.option("-f", "--format", "fmt", type=click.Choice(FORMAT_NAMES), default="auto", show_default=True,
               help="Report format; auto is github when GITHUB_ACTIONS is set, else text.")
 @click.option("--fail-on", type=click.Choice(["error", "warning", "note"]), default="error", show_default=True,
@@ -49,10 +51,8 @@ def _check_one(path: str, schema: str | None, timings: bool):
               help="Report only rules matching these globs (comma-separated or repeated), e.g. 'SCH-*'.")
 @click.option("--ignore", multiple=True, metavar="PATTERNS",
               help="Do not report rules matching these globs, e.g. 'KIN-UNREACHABLE'.")
-@click.option("--schema", type=click.Choice(["ap214", "ap242", "p105"]), default=None,
-              help="Schema profile; default: chosen from FILE_SCHEMA.")
-@click.option("-o", "--output", metavar="OUT", default=None,
-              help="Write the report to OUT atomically instead of stdout.")
+@input_schema(SCHEMA_HELP_SHORT)
+@output_to("Write the report to OUT atomically instead of stdout.")
 @click.option("--pass", "pass_through", is_flag=True,
               help="If the input passes, copy it unchanged to stdout (the report goes to stderr or -o).")
 @click.option("--list-rules", is_flag=True,
@@ -67,19 +67,35 @@ def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pa
     KIN-* checks the schema cannot express (units, ranges, placements).
     With several files all are checked and the exit status is the worst.
     """
-    from p105cli.rules.diagnostics import exit_code, parse_patterns, select_rules, RunResult
-    from p105cli.rules.report import write_report
+    from p105cli.rules.diagnostics import exit_code
 
     if list_rules:
-        from p105cli.rules.validate import list_rules as rules_of
-        from p105cli.schema.profiles import get_profile
-        with open_output(output) as out:
-            for rule, text in rules_of(get_profile(schema or "ap242")):
-                out.write(f"{rule}\t{text}\n")
-        return
+        return _list_rules(schema, output)
     inputs = inputs or ("-",)
     if pass_through and len(inputs) != 1:
         raise click.UsageError("--pass takes exactly one input")
+    results, raws = _check_all(inputs, schema, timings, select, ignore)
+    code = exit_code(results, fail_on, exit_zero)
+    if output is not None:
+        _say_unreadable(results)
+    _report(fmt, results, output, inputs, pass_through)
+    if pass_through and code == ExitCode.OK and raws[0] is not None:
+        copy_to_stdout(raws[0])  # the input's own bytes, unchanged
+    if code:
+        raise click.exceptions.Exit(code)
+
+
+def _list_rules(schema, output):
+    from p105cli.rules.validate import list_rules as rules_of
+    from p105cli.schema.profiles import get_profile
+    with open_output(output) as out:
+        for rule, text in rules_of(get_profile(schema or "ap242")):
+            out.write(f"{rule}\t{text}\n")
+
+
+def _check_all(inputs, schema, timings, select, ignore):
+    """(results, raw bytes) of every input, the diagnostics selected."""
+    from p105cli.rules.diagnostics import RunResult, parse_patterns, select_rules
     sel, ign = parse_patterns(select), parse_patterns(ignore)
     results, raws = [], []
     for path in inputs:
@@ -90,25 +106,23 @@ def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pa
                                     result.summary.rules_applicable, result.summary.seconds, result.readable)
         results.append(result)
         raws.append(raw)
-    code = exit_code(results, fail_on, exit_zero)
-    if output is not None:
-        # The report is in a file: still say on stderr why a file could not be checked.
-        for result in results:
-            if not result.readable:
-                for d in result.diagnostics:
-                    where = f"{d.file}:{d.line}:{d.column}" if d.line else d.file
-                    diag("error", f"{where}: {d.message}")
-    if pass_through:
-        if output is None:
-            write_report("text" if fmt == "auto" else fmt, results, sys.stderr)
-        else:
-            with open_output(output, inputs) as out:
-                write_report(fmt, results, out)
-        if code == ExitCode.OK and raws[0] is not None:
-            copy_to_stdout(raws[0])  # the input's own bytes, unchanged
-    else:
-        with open_output(output, inputs) as out:
-            write_report(fmt, results, out)
-    if code:
-        raise click.exceptions.Exit(code)
+    return results, raws
 
+
+def _say_unreadable(results):
+    """The report is in a file: still say on stderr why a file could not be checked."""
+    for result in results:
+        if not result.readable:
+            for d in result.diagnostics:
+                where = f"{d.file}:{d.line}:{d.column}" if d.line else d.file
+                diag("error", f"{where}: {d.message}")
+
+
+def _report(fmt, results, output, inputs, pass_through):
+    """The report on stdout or -o; with --pass, stdout is the input's, so stderr or -o."""
+    from p105cli.rules.report import write_report
+    if pass_through and output is None:
+        write_report("text" if fmt == "auto" else fmt, results, sys.stderr)
+        return
+    with open_output(output, inputs) as out:
+        write_report(fmt, results, out)

@@ -1,13 +1,11 @@
-"""What ``p105 interpolate`` does, without the CLI: read, sample, write records.
+"""What ``p105 interpolate`` does, without the CLI: read and sample; the records are
+written by :mod:`p105cli.formats.samples`.
 
-Numbers leave here in SI (metres, radians); the writers are deterministic
-(same model and options, same bytes).
+Numbers leave here in SI (metres, radians).
 """
 
 from __future__ import annotations
 
-import csv
-import json
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -15,7 +13,7 @@ import numpy as np
 
 from .paths import PathError, parameter_grid, sample_path
 
-__all__ = ["Plan", "SamplingError", "SampledModel", "sample_model", "write_jsonl", "write_csv"]
+__all__ = ["Plan", "SamplingError", "SampledModel", "sample_model"]
 
 
 class SamplingError(ValueError):
@@ -165,52 +163,3 @@ def sample_model(doc, *, what: str = "all", paths=(), sequences=(), plan: Plan =
                 raise SamplingError(f"#{item.id} {item.name!r}: t = {bad[0]!r} is outside its range "
                                     f"[{lo!r}, {hi!r}]")
     return out
-
-
-def _dump(rec) -> str:
-    return json.dumps(rec, ensure_ascii=False, separators=(", ", ": "), allow_nan=False)
-
-
-def write_jsonl(result: SampledModel, out) -> None:
-    for rec in result.frames():
-        out.write(_dump(rec) + "\n")
-    for rec in result.configurations():
-        out.write(_dump(rec) + "\n")
-    out.write(_dump({"type": "summary", "paths": len(result.path_list),
-                     "sequences": len(result.sequence_list), **result.counts,
-                     "units": {"length": "m", "angle": "rad"},
-                     "skipped": [{"id": i, "message": m} for i, m in result.skipped]}) + "\n")
-
-
-def write_csv(result: SampledModel, out, what: str) -> None:
-    w = csv.writer(out, lineterminator="\n")
-    if what == "paths":
-        plan = result.plan
-        head = ["path", "link", "t", "segment", "segment_kind", "prescribed"]
-        head += [f"m{r}{c}" for r in range(3) for c in range(4)]
-        if plan.quaternion:
-            head += [f"q{ch}" for ch in plan.quaternion]
-        if plan.ypr:
-            head += ["yaw", "pitch", "roll"]
-        w.writerow(head)
-        for r in result.frames():
-            row = [r["path"], r["link"] or "", repr(r["t"]), r["segment"], r["segment_kind"],
-                   "true" if r["prescribed"] else "false"]
-            row += [repr(v) for row_ in r["matrix"][:3] for v in row_]
-            if plan.quaternion:
-                row += [repr(v) for v in r["quaternion"]["value"]]
-            if plan.ypr:
-                row += [repr(r["ypr"][k]) for k in ("yaw", "pitch", "roll")]
-            w.writerow(row)
-        return
-    names = result.pair_columns
-    w.writerow(["sequence", "t", "interval", "interpolation", "prescribed"] + names)
-    for r in result.configurations():
-        flat = {}
-        for k, v in r["pairs"].items():
-            if isinstance(v, list):
-                flat.update({f"{k}[{j}]": x for j, x in enumerate(v)})
-            else:
-                flat[k] = v
-        w.writerow([r["sequence"], repr(r["t"]), r["interval"], r["interpolation"],
-                    "true" if r["prescribed"] else "false"] + [repr(flat[c]) if c in flat else "" for c in names])

@@ -1,7 +1,7 @@
 """A model file read once: document + profile (chosen once) + Population (built once) +
 checked access to its instances.
 
-``ModelFile.of(doc, profile=None)`` accepts what ``cli.contract.load_document`` gives (a
+``ModelFile.of(doc, profile=None)`` accepts what ``cli.inputs.load_document`` gives (a
 ``StepFile`` or ``JsonDocument``), a ``Population``, or a ``ModelFile`` (returned as is). The
 profile is FILE_SCHEMA's unless given; a 1996-layout AP214 file holding su_parameters is read
 as ``p105`` (:func:`p105cli.part105.catalogue.choose_profile`).

@@ -9,7 +9,7 @@ names links and pairs) and its pair values read by :mod:`p105cli.part105.pair_va
 (1996 layout: ``mechanism``; AP242 layout: ``mechanism_representation``),
 in file order; ``read_mechanism(doc, profile=None, name=None)`` returns the
 only one, or the one called ``name``. ``doc`` is what
-:func:`p105cli.cli.contract.load_document` gives (a ``StepFile`` or a
+:func:`p105cli.cli.inputs.load_document` gives (a ``StepFile`` or a
 ``JsonDocument``), a :class:`~p105cli.schema.population.Population` or a
 :class:`~p105cli.part105.model_file.ModelFile`.
 The profile (``"ap214"``, ``"p105"``, ``"ap242"``) comes from FILE_SCHEMA
