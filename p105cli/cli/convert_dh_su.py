@@ -108,7 +108,7 @@ def convert_dh_su(convention, deg, schema, to, name, input, output):
         return
     table = _table(text, source, convention, deg, name)
     from p105cli.kinematics import dh
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from ._emit import emit_json, emit_p21
 
     mech = dh.to_mechanism(table, "ap242" if schema == "ap242" else "1996")
