@@ -560,21 +560,21 @@ def _write_csv(out, mech, result, links, t, offset, lf, af, inverse, branched=Fa
 def _resulting_paths(mech, pl, specs, inverse, target_link, target_frame, frame):
     """The link frames whose resulting paths go into the model: --resulting-path, else the
     target of an inverse analysis."""
-    from p105cli.kinematics.motion_io import MotionInputError, resulting_path_request
+    from p105cli.part105.results import ResultingPathError, resulting_path_request
     try:
         if specs:
             return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
         if inverse:
             spec = target_link if target_frame is None or frame is None else f"{target_link}:{target_frame}"
             return [resulting_path_request(mech, pl, spec, frame_matrix=frame)]
-    except MotionInputError as err:
+    except ResultingPathError as err:
         raise InputError(str(err)) from None
     return []
 
 
 def _write_model(out, mech, result, doc, t, paths=()):
     """The input model plus the analysis results, in the input's format (Part 21 or JSON)."""
-    from p105cli.kinematics.motion_io import add_results
+    from p105cli.part105.results import add_results
     from ._emit import emit_json, emit_p21
     try:
         new, notes = add_results(doc, mech, result.Q, t, result.status, paths=paths, pl=result.plan)
