@@ -13,6 +13,10 @@ from collections import defaultdict
 
 import numpy as np
 
+from p105cli.schema.model import SchemaError
+from p105cli.schema.population import Population
+from p105cli.schema.profiles import profile_for_header
+from p105cli.step.errors import ModelError
 from p105cli.step.values import record_refs as _rec_refs, ref_id
 
 from .builder import DERIVED, typed
@@ -30,21 +34,11 @@ def _fmt(v) -> str:
 # ------------------------------------------------------------------ conversion
 
 def _types(rec) -> frozenset:
+    """The entity names a record is written with (its type, or its parts' types): what the
+    diagnostics name and what the target schema must have."""
     if "complex" in rec:
         return frozenset(p["type"] for p in rec["complex"])
     return frozenset((rec["type"],))
-
-
-def _args(rec, etype=None) -> list:
-    if "complex" in rec:
-        for p in rec["complex"]:
-            if p["type"] == etype:
-                return p["args"]
-        return []
-    return rec["args"]
-
-
-_ref_of = ref_id
 
 
 _DIMENSIONS = {"length_unit": (1, 0, 0, 0, 0, 0, 0), "mass_unit": (0, 1, 0, 0, 0, 0, 0),
@@ -56,31 +50,68 @@ class Conversion:
     def __init__(self, mech, profile, source, occt_compat, diags):
         self.mech, self.profile, self.src, self.occt, self.diags = mech, profile, source, occt_compat, diags
         self.prof = PROFILES[profile]
-        self.records = {r["id"]: r for r in source.records()}
+        records = list(source.records())  # decoded once: the output keeps most of them as they are
+        self.records = {r["id"]: r for r in records}
         self.order = list(self.records)
+        # the source typed by its schema, over the same records: attributes by name, back references
+        self.pop = Population(records, mech.profile or profile_for_header(getattr(source, "header", {}) or {}))
         self.types = {i: _types(r) for i, r in self.records.items()}
         self.extra_drop: set = set()  # non-kinematic source instances re-expressed (configurations)
         self.quiet: set = set()  # instances that may lose their last user without a diagnostic
         self.refs = {i: _rec_refs(r) for i, r in self.records.items()}  # computed once: files can be big
-        self.referrers = defaultdict(list)
-        for i, refs in self.refs.items():
-            for t in refs:
-                self.referrers[t].append(i)
 
-    # -- lookups in the source
+    # -- the source, read by attribute name
+    def get(self, iid, attr):
+        """The raw value of attribute ``attr`` (a name, or ``entity.name``) of ``#iid``; None when
+        the instance is not in the source or has no such attribute."""
+        if iid not in self.records:
+            return None
+        try:
+            return self.pop.instance(iid).get(attr)
+        except SchemaError:
+            return None
+
+    def has(self, iid, attr) -> bool:
+        """Whether ``#iid`` has the explicit attribute ``attr``."""
+        return iid in self.records and attr in self.pop.instance(iid).layout.by_name
+
+    def ref(self, iid, attr):
+        """The id the attribute refers to, or None."""
+        return ref_id(self.get(iid, attr))
+
+    def refs_at(self, iid, attr) -> list:
+        """The ids an aggregate attribute refers to (None for an element that is no reference)."""
+        return [ref_id(x) for x in self.get(iid, attr) or ()]
+
+    def replaced(self, iid, values: dict) -> dict:
+        """A copy of the source's record ``#iid`` with the named attributes set to ``values`` (an
+        attribute the record does not have stays as it is)."""
+        inst = self.pop.instance(iid)
+        rec, lay = inst.record, inst.layout
+        complex_ = "complex" in rec
+        parts = [{**p, "args": list(p["args"])} for p in rec["complex"]] if complex_ else None
+        args = None if complex_ else list(rec["args"])
+        for attr, v in values.items():
+            if attr not in lay.by_name:
+                continue
+            slot = lay.slots[lay.by_name[attr][0]]
+            target = parts[slot.part]["args"] if complex_ else args
+            if slot.pos < len(target):
+                target[slot.pos] = v
+        return {**rec, "complex": parts} if complex_ else {**rec, "args": args}
+
     def of_type(self, *names):
         names = set(names)
         return [i for i in self.order if self.types[i] & names]
 
-    def referring(self, target, etype, position, part=None):
-        """Ids of ``etype`` instances whose argument ``position`` refers to ``target``."""
-        out = []
-        for i in self.referrers.get(target, ()):
-            if etype in self.types[i]:
-                a = _args(self.records[i], part or etype)
-                if position < len(a) and _ref_of(a[position]) == target:
-                    out.append(i)
-        return out
+    def referring(self, target, role):
+        """Ids of the instances referring to ``#target`` through ``role`` (``entity.attribute``),
+        in file order."""
+        return list(dict.fromkeys(inst.id for inst in self.pop.usedin(target, role)))
+
+    def referrers(self, target) -> list:
+        """Ids of the instances referring to ``#target`` through any attribute, in file order."""
+        return list(dict.fromkeys(rid for rid, _ in self.pop.backrefs(target)))
 
     def _link_rep(self, ln):
         iid = ln.id
@@ -89,12 +120,12 @@ class Conversion:
             if t & LINK_REPRESENTATION_ENTITIES:
                 return iid
             if "kinematic_link" in t:
-                for r in self.referring(iid, "kinematic_link_representation_relation", 0):
-                    return _ref_of(self.records[r]["args"][1])
-                for r in self.referring(iid, "rigid_link_representation", 3):
+                for r in self.referring(iid, "kinematic_link_representation_relation.topological_aspects"):
+                    return self.ref(r, "geometric_aspects")
+                for r in self.referring(iid, "rigid_link_representation.represented_link"):
                     return r
         for i in self.of_type(*LINK_REPRESENTATION_ENTITIES):
-            if _args(self.records[i], next(iter(self.types[i] & LINK_REPRESENTATION_ENTITIES)))[0] == ln.name:
+            if self.get(i, "representation.name") == ln.name:
                 return i
         return None
 
@@ -104,9 +135,9 @@ class Conversion:
         if rep is None:
             return None
         if "rigid_link_representation" in self.types[rep]:
-            return _ref_of(self.records[rep]["args"][3])
-        for r in self.referring(rep, "kinematic_link_representation_relation", 1):
-            return _ref_of(self.records[r]["args"][0])
+            return self.ref(rep, "represented_link")
+        for r in self.referring(rep, "kinematic_link_representation_relation.geometric_aspects"):
+            return self.ref(r, "topological_aspects")
         return None
 
     def _pair_id(self, p):
@@ -115,43 +146,39 @@ class Conversion:
             return iid
         for i in self.order:
             if any(t.endswith("_pair") or t.endswith("_pair_with_range") for t in self.types[i]):
-                a = _args(self.records[i], "representation_item") if "complex" in self.records[i] \
-                    else self.records[i]["args"]
-                if a and a[0] == p.name:
+                # AP242 names a pair by representation_item.name; the 1996 layout derives that
+                # from item_defined_transformation.name
+                attr = ("representation_item.name" if self.has(i, "representation_item.name")
+                        else "item_defined_transformation.name")
+                if self.get(i, attr) == p.name:
                     return i
         return None
 
     def _pair_frames(self, pid):
-        rec = self.records[pid]
-        if "complex" in rec:
-            a = _args(rec, "item_defined_transformation")
-            return _ref_of(a[2]), _ref_of(a[3])
-        a = rec["args"]
-        if "kinematic_joint" in self.types.get(_ref_of(a[4]) or -1, ()):  # 1996: name, description, t1, t2, joint
-            return _ref_of(a[2]), _ref_of(a[3])
-        return _ref_of(a[3]), _ref_of(a[4])
+        return self.ref(pid, "transform_item_1"), self.ref(pid, "transform_item_2")
 
     def _shape_of(self, rep):
-        for r in self.referring(rep, "kinematic_link_representation_association", 2):
-            return _ref_of(self.records[r]["args"][3])
+        for r in self.referring(rep, "kinematic_link_representation_association.rep_1"):
+            return self.ref(r, "rep_2")
         return None
 
     def _nauo_of(self, shape):
-        for r in self.referrers.get(shape, ()):
-            if "representation_relationship" in self.types[r] and "complex" in self.records[r]:
-                if _ref_of(_args(self.records[r], "representation_relationship")[2]) != shape:
-                    continue
-                for c in self.referring(r, "context_dependent_shape_representation", 0):
-                    pds = _ref_of(self.records[c]["args"][1])
-                    if pds in self.records:
-                        return _ref_of(self.records[pds]["args"][2])
+        """The assembly usage placing the product whose shape is ``#shape``: through the shape
+        representation relationship (a complex instance with a transformation) that relates it."""
+        for r in self.referring(shape, "representation_relationship.rep_1"):
+            if not self.pop.instance(r).is_complex:
+                continue
+            for c in self.referring(r, "context_dependent_shape_representation.representation_relation"):
+                pds = self.ref(c, "represented_product_relation")
+                if pds in self.records:
+                    return self.ref(pds, "definition")
         return None
 
     def _pd_of(self, shape):
-        for r in self.referring(shape, "shape_definition_representation", 1):
-            pds = _ref_of(self.records[r]["args"][0])
+        for r in self.referring(shape, "shape_definition_representation.used_representation"):
+            pds = self.ref(r, "definition")
             if pds in self.records:
-                return _ref_of(self.records[pds]["args"][2])
+                return self.ref(pds, "definition")
         return None
 
     # -- the conversion
@@ -165,16 +192,14 @@ class Conversion:
         self.k = k = Emitter(self.mech, self.profile, b, self.mech.units.length, self.occt, self.diags)
         k.item_types = self.types
         k.ids = self.ids
-        k.record_of = lambda ref: recs.get(_ref_of(ref)) or next(
-            (r for r in b.data if r["id"] == _ref_of(ref)), None)
+        k.record_of = lambda ref: recs.get(ref_id(ref)) or next(
+            (r for r in b.data if r["id"] == ref_id(ref)), None)
 
         old_rep = self._links()
         pair_items = self._pairs()
         pair_items |= self._higher_pairs()
         for ln in self.mech.links:  # named frames and other items of the link representations
-            rep = old_rep[ln.name]
-            rtype = next(iter(self.types[rep] & LINK_REPRESENTATION_ENTITIES))
-            items = [_ref_of(x) for x in _args(recs[rep], rtype)[1]]
+            items = self.refs_at(old_rep[ln.name], "items")
             k.extra_items[ln.name] = [{"ref": i} for i in items if i not in pair_items and i is not None]
         self._initial_state()
         mech_ids = self._mechanism()
@@ -191,7 +216,7 @@ class Conversion:
         base_placement = mech_ids.get("base_placement")
         if (self.prof["layout"] == "ap242" and base_placement in self.kin
                 and "mechanism_base_placement" in self.types[base_placement]):
-            self._check_base(header, out, base_placement)
+            self._check_base(base_placement)
         return header, out
 
     # -- what the source says, role by role
@@ -204,8 +229,7 @@ class Conversion:
             if rep is None:
                 raise _model_error(f"link {ln.name!r}: no link representation in the source", ln.id)
             old_rep[ln.name] = rep
-            rtype = next(iter(self.types[rep] & LINK_REPRESENTATION_ENTITIES))
-            k.link_ctx[ln.name] = _args(recs[rep], rtype)[2]
+            k.link_ctx[ln.name] = self.get(rep, "context_of_items")
             shape = self._shape_of(rep)
             k.link_shape[ln.name] = None if shape is None else {"ref": shape}
             if shape is not None:
@@ -218,11 +242,11 @@ class Conversion:
             ids["link"][ln.name] = kl
             ids["link_rep"][ln.name] = rep
             self.consumed.update(x for x in (rep, kl) if x is not None)
-            klras = self.referring(rep, "kinematic_link_representation_association", 2)
+            klras = self.referring(rep, "kinematic_link_representation_association.rep_1")
             if klras:
                 ids["klra"][ln.name] = klras[0]
             self.consumed.update(klras)
-            self.consumed.update(self.referring(rep, "kinematic_link_representation_relation", 1))
+            self.consumed.update(self.referring(rep, "kinematic_link_representation_relation.geometric_aspects"))
         return old_rep
 
     def _pairs(self) -> set:
@@ -245,13 +269,13 @@ class Conversion:
                     k.frame_reuse[(p.name, which)] = {"ref": f}
             joint = p.ids.get("joint")
             if joint not in recs:
-                a = _args(recs[pid], "kinematic_pair") if "complex" in recs[pid] else recs[pid]["args"]
-                joint = next((_ref_of(x) for x in a if "kinematic_joint" in self.types.get(_ref_of(x) or -1, ())),
-                             None)
+                joint = self.ref(pid, "kinematic_pair.joint")
+                if "kinematic_joint" not in self.types.get(joint, ()):
+                    joint = None
             if joint in recs:
                 ids["joint"][p.name] = joint
                 self.consumed.add(joint)
-            for r in self.referrers.get(pid, ()):
+            for r in self.referrers(pid):
                 t = self.types[r]
                 if any(x.endswith("_pair_range") for x in t):
                     ids["range"][p.name] = r
@@ -280,20 +304,20 @@ class Conversion:
                 same = src_layout == self.prof["layout"] or np.allclose(P, np.eye(4), rtol=0.0, atol=1e-12)
                 if g in recs and same:
                     k.curve_reuse[(p.name, key)] = {"ref": g}
-            for r in [pid, *self.referrers.get(pid, ())]:
+            for r in [pid, *self.referrers(pid)]:
                 for x in _rec_refs(recs[r]):
                     if x in recs and not self.types[x] & {"kinematic_joint", "axis2_placement_3d", "su_parameters"}:
                         items.add(x)
                         self.quiet.add(x)
         if higher:
             for i in self.of_type("kinematic_frame_background_representation"):
-                self.quiet.update(_ref_of(x) for x in recs[i]["args"][1])
-                self.quiet.add(_ref_of(recs[i]["args"][2]))
+                self.quiet.update(self.refs_at(i, "items"))
+                self.quiet.add(self.ref(i, "context_of_items"))
                 self.consumed.add(i)
             self.consumed.update(self.of_type("kinematic_frame_based_transformation",
                                               "kinematic_frame_background_representation_association"))
             for i in self.of_type("representation"):  # the holders of the frame-based transformations
-                held = [_ref_of(x) for x in recs[i]["args"][1]]
+                held = self.refs_at(i, "items")
                 if held and all("kinematic_frame_based_transformation" in self.types.get(x, ()) for x in held):
                     self.extra_drop.add(i)
         return items
@@ -305,14 +329,13 @@ class Conversion:
             return
         self.consumed.add(ist)
         t = self.types[ist]
-        vals = recs[ist]["args"][1] if t & {"initial_state", "mechanism_state_representation"} else []
+        vals = (self.refs_at(ist, "pair_values") if "initial_state" in t  # 1996
+                else self.refs_at(ist, "items") if "mechanism_state_representation" in t else [])
         by_pair = {}
-        for v in vals:
-            vid = _ref_of(v)
+        for vid in vals:
             if vid in recs:
                 self.consumed.add(vid)
-                pref = next((_ref_of(x) for x in recs[vid]["args"] if _ref_of(x) is not None), None)
-                by_pair[pref] = vid
+                by_pair[self.ref(vid, "applies_to_pair")] = vid
         for p in self.mech.pairs:
             pid = self.ids["pair"].get(p.name)
             if pid in by_pair:
@@ -342,16 +365,16 @@ class Conversion:
         for etype in ("kinematic_ground_representation", "mechanism_representation", "kinematic_topology_structure"):
             found = self.of_type(etype)
             if found:
-                world_ctx = self.records[found[0]]["args"][2]
+                world_ctx = self.get(found[0], "context_of_items")
                 break
         k.world_ctx = world_ctx if world_ctx is not None else k.link_ctx[self.mech.base]
         found = self.of_type("kinematic_property_definition", "product_definition_kinematics")
         if not found:
             raise _model_error("the source has no product definition for the mechanism "
                                "(kinematic_property_definition / product_definition_kinematics)", None)
-        k.assembly_pd = self.records[found[0]]["args"][2]
+        k.assembly_pd = self.get(found[0], "property_definition.definition")
         for i in self.of_type("kinematic_ground_representation")[:1]:
-            items = [_ref_of(x) for x in self.records[i]["args"][1]]
+            items = self.refs_at(i, "items")
             origin = next((x for x in items if "axis2_placement_3d" in self.types.get(x, ())), None)
             if origin is not None:
                 k.world_origin = {"ref": origin}
@@ -384,7 +407,7 @@ class Conversion:
         kept = {i: self.records[i] for i in self.order if i not in dropped}
         # a kept instance that still refers to a dropped one (whose id no new instance took)
         # goes too, with a diagnostic
-        todo = sorted({r for d in dropped for r in self.referrers.get(d, ()) if r in kept})
+        todo = sorted({r for d in dropped for r in self.referrers(d) if r in kept})
         while todo:
             i = todo.pop(0)
             if i not in kept:
@@ -395,11 +418,11 @@ class Conversion:
                 self.diags.append(f"#{i}: {label} refers to #{bad[0]}, which is not converted; left out")
                 del kept[i]
                 dropped.add(i)
-                todo.extend(sorted(r for r in self.referrers.get(i, ()) if r in kept))
+                todo.extend(sorted(r for r in self.referrers(i) if r in kept))
         self._fix_profile(kept, b, new)
         data = {**kept, **new}
         refs = {i: (self.refs[i] if rec is self.records.get(i) else _rec_refs(rec)) for i, rec in data.items()}
-        for i in _collect_orphans(data, refs, self.referrers, set(new)):
+        for i in _collect_orphans(data, refs, lambda i: bool(self.pop.backrefs(i)), set(new)):
             t = self.types[i]
             if not t & _QUIET_ORPHANS and i not in self.quiet:
                 self.diags.append(f"#{i}: {'+'.join(sorted(t))} was used only by instances that are not "
@@ -412,22 +435,13 @@ class Conversion:
                                       f"in {self.profile} (kept as it is)")
         return [data[i] for i in sorted(data)]
 
-    def _check_base(self, header, data, iid):
+    def _check_base(self, iid):
         """AP242 has no mechanism_base_placement: the base is placed in the world only by the
         assembly (the base link's product occurrence). Say whether the converted file still
         carries the source's base placement that way."""
-        from p105cli.step import DataSection
-        from p105cli.step.jsonmodel import JsonDocument
-
-        from p105cli.kinematics.reader import read_mechanisms
-
         T = np.asarray(self.mech.T_world_base)
         where = f"translation {_fmt(T[:3, 3] / self.mech.units.length)} in file units"
-        try:
-            back = read_mechanisms(JsonDocument(header, [DataSection(None, len(data))], data), self.profile)
-            T_back = next(m for m in back if m.name == self.mech.name).T_world_base
-        except Exception:
-            T_back = None
+        T_back = self._assembly_base()
         tol = 1e-9 * max(1.0, self.mech.size())
         if T_back is not None and np.allclose(T_back, T, rtol=0.0, atol=tol):
             self.diags.append(f"#{iid}: mechanism_base_placement does not exist in AP242; the base link's "
@@ -435,6 +449,37 @@ class Conversion:
         elif not np.allclose(T, np.eye(4), rtol=0.0, atol=tol):
             self.diags.append(f"#{iid}: mechanism_base_placement does not exist in AP242 and the assembly does "
                               f"not place the base link there: the base placement ({where}) is lost")
+
+    def _assembly_base(self):
+        """The base link's placement as an AP242 reader finds it in the converted file: the
+        transformation of the product occurrence that the emitted link-shape association ties
+        the base link to (``Emitter.write_ap242``), read from the source's instances the file
+        keeps; the identity when the file ties the base to none; None when those instances give
+        no placement."""
+        from p105cli.kinematics.reader import _Doc  # checked access (its ModelError) and units
+
+        k, base = self.k, self.mech.base
+        nauo = ref_id(k.link_nauo.get(base))
+        if k.link_shape.get(base) is None or nauo is None:
+            return np.eye(4)
+        d = _Doc(self.pop)
+        try:
+            if not d.is_a(nauo, "product_definition_relationship") or \
+                    d.ref(nauo, "relating_product_definition", optional=True) != ref_id(k.assembly_pd):
+                return np.eye(4)
+            for pds in d.usedin(nauo, "property_definition.definition"):
+                for cdsr in d.usedin(pds, "context_dependent_shape_representation.represented_product_relation"):
+                    rel = d.ref(cdsr, "representation_relation", optional=True)
+                    if not d.is_a(rel, "representation_relationship_with_transformation"):
+                        continue
+                    op = d.ref(rel, "transformation_operator")
+                    r1, r2 = d.ref(rel, "rep_1"), d.ref(rel, "rep_2")
+                    if d.is_a(op, "item_defined_transformation"):
+                        return d.item_defined_transformation(op, d.scale(r1), d.scale(r2))
+                    return d.placement(op, d.scale(r2))
+        except ModelError:
+            return None
+        return np.eye(4)
 
     def _carried(self, candidates, kin, new, target_entities) -> set:
         if self.occt or target_entities is None:
@@ -464,12 +509,12 @@ class Conversion:
         rec = self.records.get(vid)
         if rec is None or "complex" in rec or not rec["type"].endswith("_pair_value"):
             return None
-        a = rec["args"]
-        at = 0 if _ref_of(a[0]) is not None else 1  # 1996: (pair, ...); AP242: (name, pair, ...)
-        name = pair_names.get(_ref_of(a[at]))
+        name = pair_names.get(self.ref(vid, "applies_to_pair"))
         if name is None:
             return None
-        rest = a[at + 1:]
+        inst = self.pop.instance(vid)  # the value entity's own attributes, in their order
+        rest = [inst.raw(n) for n, slot in enumerate(inst.layout.slots)
+                if slot.entity not in ("representation_item", "pair_value")]
         kind = self.mech.pair(name).kind
         if kind in HIGHER_VALUES:
             rest = self._higher_value(kind, rest)
@@ -485,17 +530,20 @@ class Conversion:
 
         out = []
         for item, x in zip(HIGHER_VALUES[kind], rest):
-            r = self.records.get(_ref_of(x))
+            r = self.records.get(ref_id(x))
             if isinstance(item, tuple):
                 if r is None or not _types(r) & {"point_on_curve", "point_on_surface"}:
                     return None
                 self.extra_drop.add(r["id"])
-                out.append(("point", item[1], r["type"], list(r["args"][2:])))
+                params = (("point_parameter",) if "point_on_curve" in _types(r)
+                          else ("point_parameter_u", "point_parameter_v"))
+                out.append(("point", item[1], r["type"], [self.get(r["id"], a) for a in params]))
             elif item == "ypr" and r is not None:
-                d = self.records.get(_ref_of(r["args"][1]))
+                d = self.records.get(self.ref(r["id"], "direction_of_axis"))
                 if d is None:
                     return None
-                ypr = convert_spatial_to_ypr_rotation(d["args"][1], r["args"][2], self.mech.units.angle)
+                ypr = convert_spatial_to_ypr_rotation(self.get(d["id"], "direction_ratios"),
+                                                      self.get(r["id"], "rotation_angle"), self.mech.units.angle)
                 out.append(typed("ypr_rotation", [float(v) for v in ypr]))
                 self.extra_drop.update((r["id"], d["id"]))
             else:
@@ -503,40 +551,44 @@ class Conversion:
         return out
 
     def _configs_1996(self, seq, initial_vals, pair_names):
-        steps = [self.records.get(_ref_of(x)) for x in self.records[seq]["args"][0]]
+        step_ids = self.refs_at(seq, "interpolated_configuration_sequence.interpolation")
+        steps = [self.records.get(x) for x in step_ids]
         if not steps or any(s is None or "configuration_interpolation" not in _types(s) for s in steps):
             return None, []
-        defs = [_ref_of(steps[0]["args"][0])] + [_ref_of(s["args"][1]) for s in steps]
-        interps = [s["args"][2].get("enum", "UNDEFINED").lower() for s in steps] + ["discontinuous"]
-        used = [seq, *(_ref_of(x) for x in self.records[seq]["args"][0])]
+        defs = ([self.ref(step_ids[0], "previous_configuration_definition")]
+                + [self.ref(s, "next_configuration_definition") for s in step_ids])
+        interps = [self.get(s, "configuration_interpolation.interpolation").get("enum", "UNDEFINED").lower()
+                   for s in step_ids] + ["discontinuous"]
+        used = [seq, *step_ids]
         out = []
         for d, interp in zip(defs, interps):
-            rec = self.records.get(d)
-            if rec is None or len(rec.get("args", ())) < 2:
+            if not (self.has(d, "pair_values") and self.has(d, "t_parameter")):
                 return None, []
-            vids = [_ref_of(x) for x in rec["args"][0]]
-            t = rec["args"][1]
+            vids = self.refs_at(d, "pair_values")
+            t = self.get(d, "t_parameter")
             t = t.get("value") if isinstance(t, dict) else t
             used.append(d)
             out.append((vids, t, interp))
         return self._neutral(out, initial_vals, pair_names, used)
 
     def _configs_242(self, seq, initial_state, pair_names):
-        segs = [self.records.get(_ref_of(x)) for x in self.records[seq]["args"][1]]
+        seg_ids = self.refs_at(seq, "segments")
+        segs = [self.records.get(x) for x in seg_ids]
         if not segs or any(s is None or "interpolated_configuration_segment" not in _types(s) for s in segs):
             return None, []
-        used = [seq, *(_ref_of(x) for x in self.records[seq]["args"][1])]
+        used = [seq, *seg_ids]
         out = []
-        for s in segs:
-            state = _ref_of(s["args"][0])
+        for s in seg_ids:
+            state = self.ref(s, "state")
             rec = self.records.get(state)
             if rec is None or "mechanism_state_representation" not in _types(rec):
                 return None, []
-            interp = s["args"][2].get("enum", "UNDEFINED_INTERPOLATION_TYPE").lower().replace("_interpolation_type", "")
+            interp = self.get(s, "interpolation").get("enum", "UNDEFINED_INTERPOLATION_TYPE").lower().replace(
+                "_interpolation_type", "")
             if state != initial_state:
                 used.append(state)
-            out.append(([_ref_of(x) for x in rec["args"][1]] if state != initial_state else None, s["args"][1],
-                        interp))
+            out.append((self.refs_at(state, "items") if state != initial_state else None,
+                        self.get(s, "t_parameter"), interp))
         return self._neutral(out, None, pair_names, used)
 
     def _neutral(self, configs, initial_vals, pair_names, used):
@@ -561,18 +613,17 @@ class Conversion:
         initial = self.mech.ids.get("initial_state")
         initial_vals = None
         if initial in self.records and "initial_state" in self.types[initial]:
-            initial_vals = [_ref_of(x) for x in self.records[initial]["args"][1]]
+            initial_vals = self.refs_at(initial, "pair_values")
         found = []
         for seq in self.of_type("interpolated_configuration_sequence"):
-            a = self.records[seq]["args"]
-            if len(a) == 1:
+            if not self.has(seq, "segments"):  # 1996: a list of configuration interpolations
                 configs, used = self._configs_1996(seq, initial_vals, pair_names)
                 name = f"{self.mech.name} configurations"
-                holders = self.referrers.get(seq, [])
+                holders = self.referrers(seq)
             else:
                 configs, used = self._configs_242(seq, initial, pair_names)
-                name = a[0]
-                holders = [r for r in self.referrers.get(seq, [])
+                name = self.get(seq, "representation_item.name")
+                holders = [r for r in self.referrers(seq)
                            if "interpolated_configuration_representation" in self.types[r]]
                 used.extend(holders)
             if configs:
@@ -586,7 +637,7 @@ class Conversion:
             self.extra_drop.update(i for i in used if i in self.records)
             if k.layout == "1996":  # a kinematic_control is written anew; AP242's motion context goes
                 consumed.update(h for h in holders if "kinematic_control" in self.types[h])
-                self.quiet.update(_ref_of(self.records[h]["args"][2]) for h in holders
+                self.quiet.update(self.ref(h, "context_of_items") for h in holders
                                   if "interpolated_configuration_representation" in self.types[h])
 
     def _motion_context(self, k, holders):
@@ -594,16 +645,12 @@ class Conversion:
         else the world context with a (dimensionless) parameter."""
         for h in holders:
             if "interpolated_configuration_representation" in self.types[h]:
-                return self.records[h]["args"][2]
-        ctx = self.records.get(_ref_of(k.world_ctx))
-        if ctx is None or "complex" not in ctx:
+                return self.get(h, "context_of_items")
+        ctx = ref_id(k.world_ctx)
+        if ctx not in self.records or "complex" not in self.records[ctx]:
             return k.world_ctx
-        parts = []
-        for part in ctx["complex"]:
-            args = part["args"]
-            if part["type"] == "representation_context":
-                args = [f"{self.mech.name} motion", *args[1:]]
-            parts.append((part["type"], args))
+        rec = self.replaced(ctx, {"context_identifier": f"{self.mech.name} motion"})
+        parts = [(part["type"], part["args"]) for part in rec["complex"]]
         parts.append(("geometric_representation_context_with_parameter", [None]))
         return k.b.add_complex(parts)
 
@@ -614,16 +661,14 @@ class Conversion:
         for i, rec in kept.items():
             t = self.types[i]
             if "application_protocol_definition" in t and "complex" not in rec:
-                a = list(rec["args"])
-                if len(a) >= 3:
-                    a[1], a[2] = schema_name, year
-                    kept[i] = {**rec, "args": a}
+                kept[i] = self.replaced(i, {"application_interpreted_model_schema_name": schema_name,
+                                            "application_protocol_year": year})
             if "conversion_based_unit" in t and "named_unit" in t:
                 parts = []
                 for part in rec["complex"]:
                     if part["type"] == "named_unit":
                         if self.prof["cbu_dimensions_explicit"]:
-                            if part["args"] and part["args"][0] == DERIVED:
+                            if self.get(i, "named_unit.dimensions") == DERIVED:
                                 kind = next((x for x in t if x in _DIMENSIONS), "ratio_unit")
                                 dims = b.add("dimensional_exponents", *[float(x) for x in _DIMENSIONS[kind]])
                                 new[dims["ref"]] = b.data[-1]
@@ -637,8 +682,8 @@ class Conversion:
             owned = False
             for i, rec in kept.items():
                 if "applied_organization_assignment" in self.types[i]:
-                    role = _ref_of(rec["args"][1])
-                    if role in kept and kept[role]["args"][0] == "id owner":
+                    role = self.ref(i, "organization_assignment.role")
+                    if role in kept and self.get(role, "organization_role.name") == "id owner":
                         owned = True
             products = [{"ref": i} for i in kept if "product" in self.types[i]]
             if products and not owned:
@@ -678,7 +723,7 @@ _QUIET_ORPHANS = frozenset((
 ))
 
 
-def _collect_orphans(data: dict, refs: dict, src_referrers, new_ids: set) -> list:
+def _collect_orphans(data: dict, refs: dict, was_referred, new_ids: set) -> list:
     """Remove kept instances that something referred to in the source and nothing refers to now
     (items of the replaced kinematics), transitively; returns their ids. ``refs``: the
     references of each record of ``data``."""
@@ -687,7 +732,7 @@ def _collect_orphans(data: dict, refs: dict, src_referrers, new_ids: set) -> lis
     for i in data:
         for t in refs[i]:
             refcount[t] += 1
-    todo = [i for i in data if i not in new_ids and refcount[i] == 0 and src_referrers.get(i)]
+    todo = [i for i in data if i not in new_ids and refcount[i] == 0 and was_referred(i)]
     while todo:
         i = todo.pop()
         if i not in data:
@@ -696,12 +741,10 @@ def _collect_orphans(data: dict, refs: dict, src_referrers, new_ids: set) -> lis
         removed.append(i)
         for t in refs[i]:
             refcount[t] -= 1
-            if refcount[t] == 0 and t in data and t not in new_ids and src_referrers.get(t):
+            if refcount[t] == 0 and t in data and t not in new_ids and was_referred(t):
                 todo.append(t)
     return sorted(removed)
 
 
 def _model_error(message, iid):
-    from p105cli.step.errors import ModelError
-
     return ModelError(f"#{iid}: {message}" if isinstance(iid, int) else message)
