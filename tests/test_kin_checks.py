@@ -155,7 +155,7 @@ def numbers(message: str) -> list:
 # --------------------------------------------------------------------------- fixtures themselves
 
 def test_rule_table():
-    assert set(RULES) == {"KIN-UNITS", "KIN-RANGE", "KIN-YPR", "KIN-PLACEMENT", "KIN-UNREACHABLE"}
+    assert set(RULES) == {"KIN-UNITS", "KIN-RANGE", "KIN-YPR", "KIN-PLACEMENT", "KIN-UNREACHABLE", "KIN-LINK-NAME"}
     assert all(text.endswith(".") for text in RULES.values())
 
 

@@ -13,7 +13,6 @@ from collections import defaultdict
 
 import numpy as np
 
-from p105cli.schema.model import SchemaError
 from p105cli.schema.population import Population
 from p105cli.schema.profiles import profile_for_header
 from p105cli.step.errors import ModelError
@@ -21,8 +20,9 @@ from p105cli.step.values import record_refs as _rec_refs, ref_id
 
 from .builder import DERIVED, typed
 from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HIGHER_VALUES,
-                        LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, kinematic_entity_names)
+                        LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, KINEMATIC_ENTITIES)
 from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
+from .model_file import ModelFile
 
 __all__ = ["Conversion"]
 
@@ -53,8 +53,10 @@ class Conversion:
         records = list(source.records())  # decoded once: the output keeps most of them as they are
         self.records = {r["id"]: r for r in records}
         self.order = list(self.records)
-        # the source typed by its schema, over the same records: attributes by name, back references
+        # the source typed by its schema, over the same records (none decoded twice): attributes
+        # by name (the lenient ModelFile), back references (the population's index)
         self.pop = Population(records, mech.profile or profile_for_header(getattr(source, "header", {}) or {}))
+        self.mf = ModelFile(self.pop, lenient=True)
         self.types = {i: _types(r) for i, r in self.records.items()}
         self.extra_drop: set = set()  # non-kinematic source instances re-expressed (configurations)
         self.quiet: set = set()  # instances that may lose their last user without a diagnostic
@@ -64,23 +66,19 @@ class Conversion:
     def get(self, iid, attr):
         """The raw value of attribute ``attr`` (a name, or ``entity.name``) of ``#iid``; None when
         the instance is not in the source or has no such attribute."""
-        if iid not in self.records:
-            return None
-        try:
-            return self.pop.instance(iid).get(attr)
-        except SchemaError:
-            return None
+        return self.mf.get(iid, attr, None)
 
     def has(self, iid, attr) -> bool:
         """Whether ``#iid`` has the explicit attribute ``attr``."""
-        return iid in self.records and attr in self.pop.instance(iid).layout.by_name
+        return iid in self.records and self.mf.has(iid, attr)
 
     def ref(self, iid, attr):
-        """The id the attribute refers to, or None."""
-        return ref_id(self.get(iid, attr))
+        """The id the attribute names (unchecked: a dangling one too), or None."""
+        return self.mf.ref_value(iid, attr)
 
     def refs_at(self, iid, attr) -> list:
-        """The ids an aggregate attribute refers to (None for an element that is no reference)."""
+        """The ids an aggregate attribute names, element by element (None for an element that is
+        no reference: a sequence with one is not converted)."""
         return [ref_id(x) for x in self.get(iid, attr) or ()]
 
     def replaced(self, iid, values: dict) -> dict:
@@ -107,7 +105,7 @@ class Conversion:
     def referring(self, target, role):
         """Ids of the instances referring to ``#target`` through ``role`` (``entity.attribute``),
         in file order."""
-        return list(dict.fromkeys(inst.id for inst in self.pop.usedin(target, role)))
+        return list(dict.fromkeys(self.mf.usedin(target, role)))
 
     def referrers(self, target) -> list:
         """Ids of the instances referring to ``#target`` through any attribute, in file order."""
@@ -184,7 +182,7 @@ class Conversion:
     # -- the conversion
     def run(self):
         recs = self.records
-        kin_names = kinematic_entity_names() - GEOMETRY_IN_KINEMATICS
+        kin_names = KINEMATIC_ENTITIES - GEOMETRY_IN_KINEMATICS
         self.kin = {i for i in self.order if self.types[i] & kin_names}
         self.consumed: set = set()
         self.ids = defaultdict(dict)
@@ -456,13 +454,11 @@ class Conversion:
         the base link to (``Emitter.write_ap242``), read from the source's instances the file
         keeps; the identity when the file ties the base to none; None when those instances give
         no placement."""
-        from p105cli.kinematics.reader import _Doc  # checked access (its ModelError) and units
-
         k, base = self.k, self.mech.base
         nauo = ref_id(k.link_nauo.get(base))
         if k.link_shape.get(base) is None or nauo is None:
             return np.eye(4)
-        d = _Doc(self.pop)
+        d = self.mf.checked()
         try:
             if not d.is_a(nauo, "product_definition_relationship") or \
                     d.ref(nauo, "relating_product_definition", optional=True) != ref_id(k.assembly_pd):

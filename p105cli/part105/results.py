@@ -234,7 +234,7 @@ def resulting_path_request(mech, pl, spec: str, *, frame_matrix=None) -> Resulti
 
 
 def _length_of_context(pop, ctx_id, default: float) -> float:
-    from p105cli.rules.kinematics import LENGTH, context_units
+    from p105cli.schema.units import LENGTH, context_units
     try:
         f = context_units(pop, ctx_id).factor(LENGTH) if ctx_id is not None else None
     except Exception:  # noqa: BLE001 - a context without usable units: the mechanism's own

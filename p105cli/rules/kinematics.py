@@ -111,6 +111,11 @@ KIN-PLACEMENT      Placements used by kinematic instances (referenced
                    the one written), a transformation operator with a scale
                    other than 1 (not a rigid placement). Non-unit directions
                    are fine (normalised)
+KIN-LINK-NAME      (warning) two links of one mechanism with the same name (a link
+                   is called by its name, else its representation's, else
+                   ``#id``: part105/layout.py's rule, which every command
+                   uses); p105 then calls each ``<name> #<id>``, which the
+                   file's other readers will not
 KIN-UNREACHABLE    (warning) links, joints, pairs, pair values, pair ranges,
                    link representations (and their relations), pair
                    representation relationships, structures and states that
@@ -129,10 +134,14 @@ and, where one attribute is at fault, its name in ``attribute``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Optional
 
-from ..step.values import ref_id, refs_in as _refs_in
+from ..part105 import layout
+from ..part105.catalogue import KINEMATIC_ENTITIES, LIMITS, RANGE_ON, YPR_NAMES
+from ..part105.model_file import ModelFile
+from ..schema.units import ANGLE, KIND_SYMBOL as _KIND_SYMBOL, LENGTH, ContextUnits, UnitReader
+from ..schema.values import enum, is_false, is_unlimited, number, ref, untyped
+from ..step.values import refs_in as _refs_in
 from .conformance import ERROR, WARNING, Finding
 
 __all__ = ["RULES", "KIN_ENTITIES", "ContextUnits", "check_kinematics", "context_units"]
@@ -142,6 +151,7 @@ RANGE = "KIN-RANGE"
 YPR = "KIN-YPR"
 PLACEMENT = "KIN-PLACEMENT"
 UNREACHABLE = "KIN-UNREACHABLE"
+LINK_NAME = "KIN-LINK-NAME"
 
 RULES = {  # one sentence each, ready for diagnostics.register_rule
     UNITS: "Length and plane-angle units of a mechanism's representations are missing, "
@@ -153,52 +163,13 @@ RULES = {  # one sentence each, ready for diagnostics.register_rule
     PLACEMENT: "A placement used by a kinematic entity is degenerate, non-finite, "
                "non-orthogonal or not rigid.",
     UNREACHABLE: "A kinematic entity is not reachable from any mechanism.",
+    LINK_NAME: "Two links of a mechanism have the same name: p105 tells them apart by appending "
+               "their #id (part105/layout.py's naming rule).",
 }
 
 #: Entity names of Part 105 in both layouts (1996 / AP214 and AP242).
-KIN_ENTITIES = frozenset("""
-actuated_kinematic_pair circular_path configuration_definition configuration_interpolation
-constrained_kinematic_motion_representation context_dependent_kinematic_link_representation
-curve_based_path curve_based_path_with_orientation curve_based_path_with_orientation_and_parameters
-cylindrical_pair cylindrical_pair_range cylindrical_pair_value cylindrical_pair_with_range
-founded_kinematic_path free_kinematic_motion_representation fully_constrained_pair gear_pair
-gear_pair_range gear_pair_value gear_pair_with_range high_order_kinematic_pair homokinetic_pair
-initial_state interpolated_configuration_representation interpolated_configuration_segment
-interpolated_configuration_sequence item_link_motion_relationship kinematic_analysis_consistency
-kinematic_analysis_result kinematic_control kinematic_frame_background_representation
-kinematic_frame_background_representation_association kinematic_frame_based_transformation
-kinematic_ground_representation kinematic_joint kinematic_link kinematic_link_representation
-kinematic_link_representation_association kinematic_link_representation_relation kinematic_loop
-kinematic_pair kinematic_path kinematic_path_defined_by_curves kinematic_path_defined_by_nodes
-kinematic_path_segment kinematic_property_definition kinematic_property_definition_representation
-kinematic_property_mechanism_representation kinematic_property_representation_relation
-kinematic_property_topology_representation kinematic_structure kinematic_topology_directed_structure
-kinematic_topology_network_structure kinematic_topology_structure kinematic_topology_substructure
-kinematic_topology_tree_structure linear_flexible_and_pinion_pair
-linear_flexible_and_planar_curve_pair linear_flexible_link_representation linear_path
-link_motion_relationship link_motion_representation_along_path link_motion_transformation
-low_order_kinematic_pair low_order_kinematic_pair_value
-low_order_kinematic_pair_with_motion_coupling
-low_order_kinematic_pair_with_range mechanism mechanism_base_placement mechanism_representation
-mechanism_state_representation motion_link_relationship oriented_joint pair_actuator
-pair_representation_relationship pair_value path_node planar_curve_pair planar_curve_pair_range
-planar_pair planar_pair_range planar_pair_value planar_pair_with_range point_on_planar_curve_pair
-point_on_planar_curve_pair_range point_on_planar_curve_pair_value
-point_on_planar_curve_pair_with_range point_on_surface_pair point_on_surface_pair_range
-point_on_surface_pair_value point_on_surface_pair_with_range point_to_point_path prescribed_path
-prismatic_pair prismatic_pair_range prismatic_pair_value prismatic_pair_with_range
-product_definition_kinematics product_definition_relationship_kinematics rack_and_pinion_pair
-rack_and_pinion_pair_range rack_and_pinion_pair_value rack_and_pinion_pair_with_range
-resulting_path revolute_pair revolute_pair_range revolute_pair_value revolute_pair_with_range
-rigid_link_representation rolling_curve_pair rolling_curve_pair_value rolling_surface_pair
-rolling_surface_pair_value rotation_about_direction screw_pair screw_pair_range screw_pair_value
-screw_pair_with_range simple_pair_range sliding_curve_pair sliding_curve_pair_value
-sliding_surface_pair sliding_surface_pair_value spherical_pair spherical_pair_range
-spherical_pair_value spherical_pair_with_pin spherical_pair_with_pin_and_range
-spherical_pair_with_range su_parameters surface_pair surface_pair_range surface_pair_with_range
-unconstrained_pair unconstrained_pair_value universal_pair universal_pair_range
-universal_pair_value universal_pair_with_range
-""".split())
+KIN_ENTITIES = KINEMATIC_ENTITIES
+
 
 # Kinds of entity KIN-UNREACHABLE reports (any of these among an instance's types).
 _REPORTED = (
@@ -214,45 +185,12 @@ _BRIDGES = ("axis2_placement_3d", "su_parameters")
 # Pair types with angle attributes of their own (their first-link context needs an angle unit).
 _ANGLE_PAIRS = ("screw_pair", "gear_pair", "universal_pair", "homokinetic_pair")
 
-LENGTH, ANGLE = "length", "plane-angle"
-_KIND_TYPE = {LENGTH: "length_unit", ANGLE: "plane_angle_unit"}
-_KIND_SI = {LENGTH: "METRE", ANGLE: "RADIAN"}
-_KIND_SYMBOL = {LENGTH: "m", ANGLE: "rad"}
-
-_SI_PREFIX = {
-    "EXA": 1e18, "PETA": 1e15, "TERA": 1e12, "GIGA": 1e9, "MEGA": 1e6, "KILO": 1e3,
-    "HECTO": 1e2, "DECA": 1e1, "DECI": 1e-1, "CENTI": 1e-2, "MILLI": 1e-3, "MICRO": 1e-6,
-    "NANO": 1e-9, "PICO": 1e-12, "FEMTO": 1e-15, "ATTO": 1e-18,
-}
-
 # lower_limit_<suffix> / upper_limit_<suffix> -> (value attribute, kind, ypr index or None)
-_LIMITS = {
-    "actual_rotation": ("actual_rotation", ANGLE, None),
-    "actual_translation": ("actual_translation", LENGTH, None),
-    "actual_rotation_1": ("actual_rotation_1", ANGLE, None),
-    "first_rotation": ("first_rotation_angle", ANGLE, None),
-    "second_rotation": ("second_rotation_angle", ANGLE, None),
-    "rack_displacement": ("actual_displacement", LENGTH, None),
-    "actual_translation_x": ("actual_translation_x", LENGTH, None),
-    "actual_translation_y": ("actual_translation_y", LENGTH, None),
-    "actual_translation_z": ("actual_translation_z", LENGTH, None),
-    "actual_rotation_x": ("actual_rotation_x", ANGLE, None),
-    "actual_rotation_y": ("actual_rotation_y", ANGLE, None),
-    "actual_rotation_z": ("actual_rotation_z", ANGLE, None),
-    "yaw": ("input_orientation", ANGLE, 0),
-    "pitch": ("input_orientation", ANGLE, 1),
-    "roll": ("input_orientation", ANGLE, 2),
-}
-_YPR_NAMES = ("yaw", "pitch", "roll")
+_UNIT_KIND = {"A": ANGLE, "L": LENGTH}
+_LIMITS = {s: (lim.value_attribute, _UNIT_KIND[lim.unit], lim.ypr_index) for s, lim in LIMITS.items()}
+_YPR_NAMES = YPR_NAMES
 # range_on_<...> -> value attributes holding the point it bounds
-_ON_RANGES = {
-    "range_on_pair_curve": ("actual_point_on_curve",),
-    "range_on_pair_surface": ("actual_point_on_surface",),
-    "range_on_curve_1": ("actual_point_on_curve_1",),
-    "range_on_curve_2": ("actual_point_on_curve_2",),
-    "range_on_surface_1": ("actual_point_on_surface_1", "actual_point_on_surface"),
-    "range_on_surface_2": ("actual_point_on_surface_2",),
-}
+_ON_RANGES = {a: r.value_attributes for a, r in RANGE_ON.items()}
 # Curves/surfaces whose parameters are angles, periodic with one turn.
 _PERIODIC_CURVES = ("circle", "ellipse")
 _PERIODIC_U = ("cylindrical_surface", "conical_surface", "spherical_surface", "toroidal_surface")
@@ -268,43 +206,8 @@ _MISSING = object()
 
 # --------------------------------------------------------------------------- raw values
 
-_ref = ref_id  # the model's one reading of a reference value (step/values.py)
-
-
-def _untyped(v):
-    while type(v) is dict and "type" in v and "value" in v:
-        v = v["value"]
-    return v
-
-
-def _num(v) -> Optional[float]:
-    """A REAL/INTEGER value (typed or not) as a float, else None."""
-    v = _untyped(v)
-    if type(v) in (int, float):
-        return float(v)
-    return None
-
-
-def _enum(v) -> Optional[str]:
-    v = _untyped(v)
-    if type(v) is dict and "enum" in v:
-        return str(v["enum"]).upper()
-    return None
-
-
-def _is_false(v) -> bool:
-    """``.F.`` (or a Python False)."""
-    v = _untyped(v)
-    return v is False or _enum(v) == "F"
-
-
-def _is_unlimited(v) -> bool:
-    """``$`` (AP242 OPTIONAL limit) or ``UNLIMITED_RANGE(.UNLIMITED.)``."""
-    if v is None:
-        return True
-    if type(v) is dict and str(v.get("type", "")).upper() == "UNLIMITED_RANGE":
-        return True
-    return _enum(v) == "UNLIMITED"
+# the one reading of typed values (schema/values.py)
+_ref, _untyped, _num, _enum, _is_false, _is_unlimited = ref, untyped, number, enum, is_false, is_unlimited
 
 
 def _fmt(x: float) -> str:
@@ -319,39 +222,6 @@ def _close(a: float, b: float, rel: float = FACTOR_TOL) -> bool:
 
 # --------------------------------------------------------------------------- units
 
-@dataclass
-class ContextUnits:
-    """Length and plane-angle units of one representation context.
-
-    ``length``/``angle``: ``(si_factor, label, unit_id)`` or None (no such
-    unit, or one that could not be reduced to an SI factor); ``count``: how
-    many units of each kind the context assigns; ``assigned``: the context
-    is a ``global_unit_assigned_context``; ``problems``: ``(severity,
-    entity, message)`` for units that are ambiguous or wrong."""
-
-    context: Optional[int]
-    assigned: bool = False
-    length: Optional[tuple] = None
-    angle: Optional[tuple] = None
-    count: dict = field(default_factory=lambda: {LENGTH: 0, ANGLE: 0})
-    problems: list = field(default_factory=list)
-
-    def unit(self, kind: str) -> Optional[tuple]:
-        return self.length if kind == LENGTH else self.angle
-
-    def factor(self, kind: str) -> Optional[float]:
-        u = self.unit(kind)
-        return None if u is None else u[0]
-
-
-class _UnitError(Exception):
-    def __init__(self, severity, entity, message):
-        super().__init__(message)
-        self.severity = severity
-        self.entity = entity
-        self.message = message
-
-
 class _Kin:
     """One run of the checks over one population."""
 
@@ -360,7 +230,8 @@ class _Kin:
         self.schema = pop.schema
         self.out: list = []
         self._seen: set = set()
-        self._units: dict = {}
+        self.mf = ModelFile.of(pop, lenient=True)  # the lenient access of the layout walk
+        self.units = self.mf.units
         self._pair_units: dict = {}
         self._reps_of_link: dict = {}
         self.refs: dict = {}
@@ -467,76 +338,7 @@ class _Kin:
 
     # ---------------------------------------------------------------- units
     def context_units(self, ctx: Optional[int]) -> ContextUnits:
-        cu = self._units.get(ctx)
-        if cu is not None:
-            return cu
-        cu = self._units[ctx] = ContextUnits(ctx)
-        if ctx is None or ctx not in self.pop:
-            return cu
-        if not self.is_a(ctx, "global_unit_assigned_context"):
-            return cu
-        cu.assigned = True
-        units = _refs_in(self.get(ctx, "units", []), [])
-        for kind in (LENGTH, ANGLE):
-            found = [u for u in dict.fromkeys(units) if self.is_a(u, _KIND_TYPE[kind])]
-            cu.count[kind] = len(found)
-            if len(found) > 1:
-                cu.problems.append((ERROR, ctx, f"context #{ctx} assigns {len(found)} {kind} "
-                                    f"units ({', '.join(f'#{u}' for u in found)}); exactly one "
-                                    "is needed to read the pair values (5.2.5, 5.5.7)"))
-                continue
-            if not found:
-                continue
-            try:
-                factor, label = self.unit_factor(found[0], kind, ())
-            except _UnitError as e:
-                cu.problems.append((e.severity, e.entity, e.message))
-                continue
-            if kind == LENGTH:
-                cu.length = (factor, label, found[0])
-            else:
-                cu.angle = (factor, label, found[0])
-        return cu
-
-    def unit_factor(self, u: int, kind: str, chain: tuple) -> tuple:
-        """(SI factor, label) of unit ``#u`` of kind ``kind``; _UnitError if none."""
-        if u in chain:
-            raise _UnitError(ERROR, chain[0], f"conversion-based unit #{chain[0]} loops back to "
-                             f"#{u}; its {kind} factor is undefined")
-        t = self.types(u)
-        if _KIND_TYPE[kind] not in t:
-            at = chain[-1] if chain else u
-            raise _UnitError(ERROR, at, f"#{at}'s conversion factor is given in #{u}, which is not "
-                             f"a {kind} unit")
-        if "si_unit" in t:
-            name = _enum(self.get(u, "si_unit.name", None))
-            prefix = _enum(self.get(u, "si_unit.prefix", None))
-            if name != _KIND_SI[kind]:
-                raise _UnitError(ERROR, u, f"{kind} unit #{u} is the SI unit .{name}., not "
-                                 f".{_KIND_SI[kind]}.")
-            f = _SI_PREFIX.get(prefix, 1.0) if prefix else 1.0
-            return f, f"{(prefix or '').lower()}{name.lower()}"
-        if "conversion_based_unit" in t:
-            cname = _untyped(self.get(u, "conversion_based_unit.name", None))
-            shown = f"'{cname}'" if isinstance(cname, str) else f"#{u}"
-            mwu = self.get_ref(u, "conversion_factor")
-            if mwu is None:
-                raise _UnitError(ERROR, u, f"conversion-based unit {shown} #{u} has no conversion "
-                                 "factor")
-            value = _num(self.get(mwu, "value_component", None))
-            base = _ref(self.get(mwu, "unit_component", None))
-            if value is None or not math.isfinite(value) or value <= 0.0:
-                raise _UnitError(ERROR, u, f"conversion-based unit {shown} #{u}: conversion factor "
-                                 f"#{mwu} has value_component {value!r}, not a positive number")
-            if base is None or base not in self.pop:
-                raise _UnitError(ERROR, u, f"conversion-based unit {shown} #{u}: conversion factor "
-                                 f"#{mwu} has no unit_component")
-            f, _ = self.unit_factor(base, kind, chain + (u,))
-            return value * f, (cname.lower() if isinstance(cname, str) else f"#{u}")
-        what = ("context_dependent_unit" if "context_dependent_unit" in t else
-                "+".join(sorted(self.pop.leaf_types_of(u))))
-        raise _UnitError(WARNING, u, f"{kind} unit #{u} ({what}) has no SI conversion; "
-                         f"{kind} values in its context cannot be compared with others")
+        return self.units.context_units(ctx)
 
     def rep_context(self, rep: Optional[int]) -> Optional[int]:
         if rep is None:
@@ -548,11 +350,7 @@ class _Kin:
 
     # ---------------------------------------------------------------- structure
     def joint_links(self, joint) -> tuple:
-        if joint is None:
-            return None, None
-        if self.has(joint, "first_link"):
-            return self.get_ref(joint, "first_link"), self.get_ref(joint, "second_link")
-        return self.get_ref(joint, "edge_start"), self.get_ref(joint, "edge_end")
+        return layout.joint_links(self.mf, joint)
 
     def pair_links(self, pair) -> tuple:
         return self.joint_links(self.get_ref(pair, "joint"))
@@ -564,37 +362,16 @@ class _Kin:
             return []
         reps = self._reps_of_link.get(link)
         if reps is None:
-            reps = []
-            for r in self.back.get(link, ()):
-                t = self.types(r)
-                if "kinematic_link_representation_relation" in t:
-                    if self.get_ref(r, "topological_aspects") == link:
-                        g = self.get_ref(r, "geometric_aspects")
-                        if g is not None:
-                            reps.append(g)
-                elif "kinematic_link_representation" in t:
-                    if self.get_ref(r, "represented_link") == link:
-                        reps.append(r)
-            reps = list(dict.fromkeys(reps))
-            self._reps_of_link[link] = reps
+            reps = self._reps_of_link[link] = layout.link_reps(self.mf, link)
         return reps
 
     def pair_rep(self, pair, which: int) -> Optional[int]:
         """The link representation of the pair's first (1) or second (2) link."""
-        links = self.pair_links(pair)
-        reps = self.link_reps(links[which - 1])
-        if reps:
-            frame = self.get_ref(pair, f"transform_item_{which}")
-            for r in reps:  # prefer the one holding the pair frame
-                if frame is not None and frame in self.refs.get(r, ()):
-                    return r
-            return reps[0]
+        link = self.pair_links(pair)[which - 1]
         frame = self.get_ref(pair, f"transform_item_{which}")
-        if frame is None:
+        if link is None and frame is None:
             return None
-        for r in self.referrers(frame, ("kinematic_link_representation",)):
-            return r
-        return None
+        return layout.frame_rep(self.mf, link, frame)
 
     def pair_units(self, pair) -> tuple:
         """(ContextUnits of the pair's first-link context or None, that link representation)."""
@@ -653,41 +430,7 @@ class _Kin:
 
 def _mechanism_parts(k: _Kin, mech) -> tuple:
     """(pairs, links, reference link representation) of a mechanism."""
-    joints: list = []
-    pairs: list = []
-    base_rep = None
-    if k.is_a(mech, "mechanism"):
-        struct = k.get_ref(mech, "structure_definition")
-        joints = _refs_in(k.get(struct, "joints", []), []) if struct is not None else []
-        base = k.get_ref(mech, "base")
-        reps = k.link_reps(base)
-        base_rep = reps[0] if reps else None
-        links = [base] if base is not None else []
-    else:
-        links = []
-        for prr in _refs_in(k.get(mech, "items", []), []):
-            p = k.get_ref(prr, "transformation_operator")
-            if p is not None and k.is_a(p, "kinematic_pair"):
-                pairs.append(p)
-                j = k.get_ref(p, "joint")
-                if j is not None:
-                    joints.append(j)
-        topo = k.get_ref(mech, "represented_topology")
-        if topo is not None:
-            joints.extend(j for j in _refs_in(k.get(topo, "items", []), [])
-                          if k.is_a(j, "kinematic_joint"))
-        for kp in k.referrers(mech, ("kinematic_property_mechanism_representation",),
-                              "used_representation"):
-            b = k.get_ref(kp, "base")
-            if b is not None:
-                base_rep = b
-                break
-    joints = list(dict.fromkeys(joints))
-    for j in joints:
-        for p in k.referrers(j, ("kinematic_pair",), "joint"):
-            pairs.append(p)
-        links.extend(x for x in k.joint_links(j) if x is not None)
-    return list(dict.fromkeys(pairs)), list(dict.fromkeys(links)), base_rep
+    return layout.mechanism_parts(k.mf, mech)
 
 
 def _pair_needs_angle(k: _Kin, pair, which: int, holders_of: dict) -> bool:
@@ -1192,6 +935,26 @@ def _check_reachability(k: _Kin, mechs: list, components: dict) -> None:
         k.add(UNREACHABLE, WARNING, f"{k.label(i)} #{i} is not part of any mechanism: {why}", i)
 
 
+# --------------------------------------------------------------------------- KIN-LINK-NAME
+
+def _check_link_names(k: _Kin, mechs: list) -> None:
+    for m in mechs:
+        _pairs, links, _base = _mechanism_parts(k, m)
+        by_name: dict = {}
+        for link in links:
+            reps = k.link_reps(link)
+            by_name.setdefault(layout.link_name(k.mf, link, reps[0] if reps else None), []).append(link)
+        for name, same in by_name.items():
+            if len(same) < 2:
+                continue
+            same = sorted(same)
+            called = ", ".join(f"'{name} #{x}'" for x in same)
+            for link in same[1:]:
+                k.add(LINK_NAME, WARNING, f"link name {name!r} is also the name of link #{same[0]} of "
+                      f"mechanism #{m}: p105 calls them {called}", link,
+                      "name" if k.mf.string(link, "name") else None)
+
+
 # --------------------------------------------------------------------------- entry points
 
 def check_kinematics(pop) -> list:
@@ -1210,11 +973,13 @@ def check_kinematics(pop) -> list:
     _check_ypr(k, holders)
     _check_placements(k)
     _check_reachability(k, mechs, components)
+    _check_link_names(k, mechs)
     order = {r: n for n, r in enumerate(RULES)}
     return sorted(k.out, key=lambda f: (f.entity if f.entity is not None else -1,
                                         order.get(f.rule, 99), f.attribute or "", f.message))
 
 
 def context_units(pop, context_id: int) -> ContextUnits:
-    """The length and plane-angle units of representation context ``#context_id``."""
-    return _Kin(pop, scan=False).context_units(context_id)
+    """The length and plane-angle units of representation context ``#context_id``
+    (:func:`p105cli.schema.units.context_units`; kept here for the checks' callers)."""
+    return UnitReader(pop).context_units(context_id)

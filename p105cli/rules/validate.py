@@ -21,9 +21,9 @@ What is checked, in order:
 from __future__ import annotations
 
 import linecache
-from functools import lru_cache
 from pathlib import Path
 
+from p105cli.part105.catalogue import KINEMATIC_ENTITIES
 from p105cli.step.values import record_refs
 
 from .conformance import RULES as CONFORMANCE_RULES
@@ -31,8 +31,6 @@ from .conformance import check_population
 from .diagnostics import NOT_EVALUATED, Diagnostic, RunResult, register_rule
 from .kinematics import RULES as KINEMATICS_RULES
 from .kinematics import check_kinematics
-
-_KIN_NAMES_FILE = Path(__file__).resolve().parent.parent / "schema" / "data" / "kinematics_entities.txt"
 
 for _rule, _text in {**CONFORMANCE_RULES, **KINEMATICS_RULES}.items():
     register_rule(_rule, _text)
@@ -42,11 +40,10 @@ register_rule("P21-WARNING", "The reader accepted something the ISO 10303-21 gra
 register_rule("P21-SCHEMA", "FILE_SCHEMA names no schema p105 knows; give one with --schema.")
 
 
-@lru_cache(maxsize=1)
 def kinematic_entity_names() -> frozenset:
-    """The Part 105 entity names (1996 and AP242 layouts) that start the kinematic closure."""
-    return frozenset(line.strip().lower() for line in _KIN_NAMES_FILE.read_text().splitlines()
-                     if line.strip())
+    """The Part 105 entity names (1996 and AP242 layouts) that start the kinematic closure
+    (:data:`p105cli.part105.catalogue.KINEMATIC_ENTITIES`)."""
+    return KINEMATIC_ENTITIES
 
 
 def kinematic_closure(pop) -> list[int]:
