@@ -22,6 +22,7 @@ from .builder import DERIVED, typed
 from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HIGHER_VALUES,
                         LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, KINEMATIC_ENTITIES)
 from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
+from .layout import link_reps, rep_links
 from .model_file import ModelFile
 
 __all__ = ["Conversion"]
@@ -112,16 +113,15 @@ class Conversion:
         return list(dict.fromkeys(rid for rid, _ in self.pop.backrefs(target)))
 
     def _link_rep(self, ln):
+        """The source's representation of link ``ln`` (part105.layout's), else, for a link the
+        source does not name by id, the link representation of that name."""
         iid = ln.id
         if iid in self.records:
             t = self.types[iid]
             if t & LINK_REPRESENTATION_ENTITIES:
                 return iid
             if "kinematic_link" in t:
-                for r in self.referring(iid, "kinematic_link_representation_relation.topological_aspects"):
-                    return self.ref(r, "geometric_aspects")
-                for r in self.referring(iid, "rigid_link_representation.represented_link"):
-                    return r
+                return next(iter(link_reps(self.mf, iid)), None)
         for i in self.of_type(*LINK_REPRESENTATION_ENTITIES):
             if self.get(i, "representation.name") == ln.name:
                 return i
@@ -132,11 +132,7 @@ class Conversion:
             return ln.id
         if rep is None:
             return None
-        if "rigid_link_representation" in self.types[rep]:
-            return self.ref(rep, "represented_link")
-        for r in self.referring(rep, "kinematic_link_representation_relation.geometric_aspects"):
-            return self.ref(r, "topological_aspects")
-        return None
+        return next(iter(rep_links(self.mf, rep)), None)
 
     def _pair_id(self, p):
         iid = p.ids.get("pair")
