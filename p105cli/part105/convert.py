@@ -24,6 +24,7 @@ from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HI
 from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
 from .layout import link_reps, rep_links
 from .model_file import ModelFile
+from .pair_values import value_attributes
 
 __all__ = ["Conversion"]
 
@@ -501,12 +502,10 @@ class Conversion:
         rec = self.records.get(vid)
         if rec is None or "complex" in rec or not rec["type"].endswith("_pair_value"):
             return None
-        name = pair_names.get(self.ref(vid, "applies_to_pair"))
+        pair, rest = value_attributes(self.mf, vid)
+        name = pair_names.get(pair)
         if name is None:
             return None
-        inst = self.pop.instance(vid)  # the value entity's own attributes, in their order
-        rest = [inst.raw(n) for n, slot in enumerate(inst.layout.slots)
-                if slot.entity not in ("representation_item", "pair_value")]
         kind = self.mech.pair(name).kind
         if kind in HIGHER_VALUES:
             rest = self._higher_value(kind, rest)

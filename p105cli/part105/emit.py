@@ -24,6 +24,7 @@ from p105cli.kinematics.placements import compose, inverse
 from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from .catalogue import (COUPLED_FREEDOMS, FREEDOM_FLAGS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
                         PROFILES, RANGE_KINDS_1996, RANGE_KINDS_AP242, WRITTEN_HIGHER_RANGES, WRITTEN_LOW_KINDS)
+from .pair_values import scalar_values, value_arguments, value_entity
 
 __all__ = ["Emitter", "IdBuilder", "write_kinematics", "SUPPORTED_KINDS", "VALUE_UNITS", "HIGHER_KINDS_WRITTEN"]
 
@@ -350,7 +351,7 @@ class Emitter:
         kind = p.kind
         if kind == "fully_constrained":
             return None
-        entity = "universal_pair_value" if kind == "homokinetic" else f"{kind}_pair_value"
+        entity = value_entity(kind)
         if kind in HIGHER_KINDS_WRITTEN:
             vals = self.higher_values(p, q)
         elif kind == "spherical":
@@ -361,11 +362,9 @@ class Emitter:
             if self.layout == "1996":  # a representation item must be in a representation (WR1)
                 self.b.add("representation", f"{p.name} value", vals, self.link_ctx[p.link1])
         else:
-            vals = [self.value(u, x) for u, x in zip(VALUE_UNITS[kind], q)]
+            vals = scalar_values(VALUE_UNITS[kind], q, self.A, self.L)
         self._reuse("value", p.name)
-        if self.layout == "1996":
-            return b.add(entity, pair_ref, *vals)
-        return b.add(entity, p.name, pair_ref, *vals)
+        return b.add(entity, *value_arguments(self.layout, p.name, pair_ref, vals))
 
     def check_kinds(self):
         ok = []
@@ -614,8 +613,7 @@ class Emitter:
                             if self.layout == "1996":
                                 which = dict(HIGHER_GEOMETRY[self.mech.pair(pname).kind][0])[key]
                                 self.background_items[(pname, which)].append(rest[j])
-                    refs.append(b.add(entity, pair, *rest) if self.layout == "1996"
-                                else b.add(entity, pname, pair, *rest))
+                    refs.append(b.add(entity, *value_arguments(self.layout, pname, pair, rest)))
             written.append((refs, t, interp))
         if self.layout == "1996":
             defs = [b.add("configuration_definition", refs, typed("parameter_value", real(t)))

@@ -52,6 +52,8 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     exactly when a resulting path is there). Returns ``(document, notes)``."""
     from p105cli.step.jsonmodel import extended
 
+    from .pair_values import scalar_values, value_arguments, value_entity
+
     layout = "ap242" if mech.profile == "ap242" else "1996"
     lf, af = mech.units.length, mech.units.angle
     data = list(doc.records())
@@ -84,8 +86,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
         pair_ref = p.ids.get("pair")
         if pair_ref is None:
             raise ValueError(f"pair {p.name!r} has no instance in the model")
-        entity = "universal_pair_value" if p.kind == "homokinetic" else f"{p.kind}_pair_value"
-        conv = [float(x) / (af if u == "A" else lf) for u, x in zip(p.type.value_units, q)]
+        conv = scalar_values(p.type.value_units, q, lambda x: float(x) / af, lambda x: float(x) / lf)
         if p.kind == "spherical":
             vals = [{"type": "YPR_ROTATION", "value": conv}]
         elif p.kind == "unconstrained":
@@ -96,8 +97,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
             vals = [new("axis2_placement_3d", [f"{p.name} value", o, z, x])]
         else:
             vals = conv
-        ref = {"ref": pair_ref}
-        return new(entity, [ref, *vals] if layout == "1996" else [p.name, ref, *vals])
+        return new(value_entity(p.kind), value_arguments(layout, p.name, {"ref": pair_ref}, vals))
 
     keep = [i for i, s in enumerate(status) if s in WRITTEN_STATUSES]
     if len(keep) < len(status):
