@@ -15,11 +15,14 @@ import numpy as np
 import pytest
 
 from conftest import SHARED
-from p105cli.cable import rod as rodmod
 from p105cli.cable.catenary import catenary, catenary_parameter
 from p105cli.cable.helix import helix_frames as kirchhoff_helix
 from p105cli.cable.rod import RodProblem, solve_rod, state_from_frames
-from p105cli.kinematics.placements import quaternion_to_matrix, rot_x, rot_y, rot_z
+from p105cli.cable.rod.model import _Model
+from p105cli.cable.rod.quaternions import _pose_quat, _qconj, _qexp, _qmat, _qmul
+from p105cli.kinematics.placements import (
+    matrix_to_quaternion, quaternion_to_matrix, rot_x, rot_y, rot_z,
+)
 
 CASES = {c["id"]: c for c in json.loads((SHARED / "reference" / "rod_cases.json").read_text())["cases"]}
 NOLOAD = np.zeros(3)
@@ -88,15 +91,15 @@ def test_catenary_parameter_extremes_and_errors():
 def test_energy_gradient_and_hessian_match_finite_differences():
     rng = np.random.default_rng(7)
     p = RodProblem(1.0, (0.7, 1.3, 0.5), NOLOAD, pose([0, 0, 0]), pose([0.5, 0.2, 0.6]))
-    m = rodmod._Model(p, 6)
-    q = m.align(rodmod._qexp(0.4 * rng.standard_normal((7, 3))))
+    m = _Model(p, 6)
+    q = m.align(_qexp(0.4 * rng.standard_normal((7, 3))))
     e0, ga, gb, *whg = m.bend(q)
     G = m.grad_nodes(ga, gb)
     Haa, Hbb, Hab = m.hess(*whg)
     eps = 1e-6
 
     def energy(dth):
-        return m.bend(rodmod._qmul(q, rodmod._qexp(dth)))[0]
+        return m.bend(_qmul(q, _qexp(dth)))[0]
 
     for node in (0, 3, 6):
         for k in range(3):
@@ -295,33 +298,33 @@ def kirchhoff_bvp(p: RodProblem, guess):
 
     K = np.asarray(p.stiffness, float)
     f = np.asarray(p.weight, float)
-    qs = rodmod._pose_quat(p.T_start)
-    qe = rodmod._pose_quat(p.T_end)
+    qs = _pose_quat(p.T_start)
+    qe = _pose_quat(p.T_end)
     if guess.quaternions[0] @ qs < 0:
         qs = -qs
 
     def rhs(s, y):
         q = y[3:7].T
         n, m = y[7:10].T, y[10:13].T
-        R = rodmod._qmat(q / np.linalg.norm(q, axis=1)[:, None])
+        R = _qmat(q / np.linalg.norm(q, axis=1)[:, None])
         u = np.einsum("pji,pj->pi", R, m) / K
         d3 = R[:, :, 2]
         uq = np.concatenate([np.zeros((len(s), 1)), u], axis=1)
-        dq = 0.5 * rodmod._qmul(q, uq)
+        dq = 0.5 * _qmul(q, uq)
         dm = -np.cross(d3, n)
         dn = np.tile(-f, (len(s), 1))
         return np.concatenate([d3, dq, dn, dm], axis=1).T
 
     def bc(ya, yb):
         qb = yb[3:7]
-        rel = rodmod._qmul(rodmod._qconj(qe), qb)
+        rel = _qmul(_qconj(qe), qb)
         if rel[0] < 0:
             rel = -rel
         return np.concatenate([ya[0:3] - p.T_start[:3, 3], ya[3:7] - qs,
                                yb[0:3] - p.T_end[:3, 3], rel[1:]])
 
     s = guess.s
-    qn = rodmod.matrix_to_quaternion(guess.frames[:, :3, :3])
+    qn = matrix_to_quaternion(guess.frames[:, :3, :3])
     qn = qn * np.sign(np.einsum("ij,j->i", qn, qs))[:, None]
     nn = guess.force_start - s[:, None] * f                   # n(s) = n(0) - f s
     mm = np.zeros((len(s), 3))                                # m' = -r' x n, from m(0)

@@ -11,6 +11,7 @@ placements module."""
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -405,6 +406,20 @@ END-ISO-10303-21;
 # --------------------------------------------------------------------------
 # fixtures and helpers
 
+@functools.cache
+def evaluator(pop) -> Evaluator:
+    """One evaluator per population, as the validator keeps one."""
+    return Evaluator(pop)
+
+
+def derived(inst, name):
+    return evaluator(inst.pop).derived_value(inst, name)
+
+
+def value(inst, name):
+    return evaluator(inst.pop).attribute(inst, name)
+
+
 @pytest.fixture(scope="module")
 def tpop():
     return Population(read_step(TEST_DATA), parse_schema(TEST_SCHEMA))
@@ -412,7 +427,7 @@ def tpop():
 
 @pytest.fixture(scope="module")
 def ev(tpop):
-    return tpop.evaluator
+    return evaluator(tpop)
 
 
 def expr_ast(text: str):
@@ -641,7 +656,7 @@ def test_nested_procedure_with_var_parameters(ev):
                     max_leaves=8))
 def test_integer_arithmetic_matches_python(text):
     """Precedence and left associativity of + - * agree with Python's."""
-    ev = Population([], parse_schema("SCHEMA s; END_SCHEMA;")).evaluator
+    ev = Evaluator(Population([], parse_schema("SCHEMA s; END_SCHEMA;")))
     assert E(ev, text) == eval(text)  # noqa: S307 - digits and + - * ( ) only
 
 
@@ -756,7 +771,7 @@ def kinematic_closure(pop) -> list:
 
 
 def all_results(pop, ev=None) -> dict:
-    ev = ev or pop.evaluator
+    ev = ev or evaluator(pop)
     out = {}
     for i in pop.ids():
         for ent, lab, r in ev.check_instance(pop.instance(i)):
@@ -777,7 +792,7 @@ def profile_of(path: Path):
 @pytest.mark.parametrize("path", PROBES + GENERATED, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_where_rule_coverage_on_probes(path, record_property, capsys):
     pop = Population(read_step(path.read_text(), str(path)), profile_of(path))
-    ev = pop.evaluator
+    ev = evaluator(pop)
     applicable = evaluated = 0
     not_evaluable = []
     instances = kinematic_closure(pop)
@@ -806,7 +821,7 @@ def test_where_rule_coverage_on_probes(path, record_property, capsys):
 @pytest.mark.parametrize("path", PROBES + GENERATED, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_derived_and_inverse_attributes_of_probes_evaluate(path):
     pop = Population(read_step(path.read_text(), str(path)), profile_of(path))
-    ev = pop.evaluator
+    ev = evaluator(pop)
     n = 0
     for iid in kinematic_closure(pop):
         inst = pop.instance(iid)
@@ -953,9 +968,9 @@ def test_unlimited_range_bound():
     assert found == {(15, "revolute_pair_range", "wr1"): None}
     pop = Population(read_step(text.replace("#15=REVOLUTE_PAIR_RANGE(#14,-1.5,1.5);",
                                             "#15=REVOLUTE_PAIR_RANGE(#14,.UNLIMITED.,-1.5);")))
-    lo = pop.instance(15).value("lower_limit_actual_rotation")
+    lo = value(pop.instance(15), "lower_limit_actual_rotation")
     assert isinstance(lo, EnumValue) and lo.type == "unlimited_range"
-    assert "AUTOMOTIVE_DESIGN.ROTATIONAL_RANGE_MEASURE" in pop.evaluator.typeof(lo)
+    assert "AUTOMOTIVE_DESIGN.ROTATIONAL_RANGE_MEASURE" in evaluator(pop).typeof(lo)
     typed = text.replace("#15=REVOLUTE_PAIR_RANGE(#14,-1.5,1.5);",
                          "#15=REVOLUTE_PAIR_RANGE(#14,PLANE_ANGLE_MEASURE(2.),"
                          "PLANE_ANGLE_MEASURE(1.));")
@@ -971,8 +986,8 @@ def test_su_parameters_need_the_p105_profile():
     assert violations(text, "p105") == {}
     assert violations(text) == {(18, "kinematic_link_representation", "wr1"): False}
     pop = Population(read_step(text), "p105")
-    assert "AUTOMOTIVE_DESIGN.RIGID_PLACEMENT" in pop.evaluator.typeof(pop.instance(9))
-    assert pop.instance(9).derived("dim") == 3
+    assert "AUTOMOTIVE_DESIGN.RIGID_PLACEMENT" in evaluator(pop).typeof(pop.instance(9))
+    assert derived(pop.instance(9), "dim") == 3
 
 
 # --------------------------------------------------------------------------
@@ -982,25 +997,25 @@ def test_su_parameters_need_the_p105_profile():
 def test_1996_pairs_rules_and_derived_values():
     pop = Population(read_step(mechanism_1996()), "p105")
     assert {k: r for k, r in all_results(pop).items() if r is not True} == {}
-    assert plain(pop.instance(51).derived("actual_orientation")) == [0.5, 0.0, 0.0]
-    ypr = pop.instance(59).derived("actual_orientation")  # given as YPR_ROTATION
+    assert plain(derived(pop.instance(51), "actual_orientation")) == [0.5, 0.0, 0.0]
+    ypr = derived(pop.instance(59), "actual_orientation")  # given as YPR_ROTATION
     assert plain(ypr) == [0.1, 0.2, 0.3] and ypr.lo == 1
-    assert "AUTOMOTIVE_DESIGN.YPR_ROTATION" in pop.evaluator.typeof(ypr)
+    assert "AUTOMOTIVE_DESIGN.YPR_ROTATION" in evaluator(pop).typeof(ypr)
     # screw: pitch * angle_in_radian / 2 * PI, exactly as written in the schema
-    assert plain(pop.instance(54).derived("actual_translation")) == pytest.approx(math.pi ** 2)
+    assert plain(derived(pop.instance(54), "actual_translation")) == pytest.approx(math.pi ** 2)
     # rack and pinion: -displacement / pinion_radius, in the file's angle unit
-    assert plain(pop.instance(56).derived("actual_rotation")) == pytest.approx(-0.5)
-    assert plain(pop.instance(52).derived("skew_angle")) == 0.0  # NVL(input_skew_angle, 0.0)
+    assert plain(derived(pop.instance(56), "actual_rotation")) == pytest.approx(-0.5)
+    assert plain(derived(pop.instance(52), "skew_angle")) == 0.0  # NVL(input_skew_angle, 0.0)
 
 
 def test_1996_functions_convert_degrees():
     pop = Population(read_step(mechanism_1996(DEGREE, angle=30.0, skew="100.")), "p105")
     assert {k: r for k, r in all_results(pop).items() if r is not True} == {
         (52, "universal_pair", "wr1"): False}  # COS(100 degrees) < 0
-    assert plain(pop.instance(51).derived("actual_orientation")) == pytest.approx([30.0, 0.0, 0.0])
-    assert plain(pop.instance(56).derived("actual_rotation")) == pytest.approx(-0.5 * 180 / math.pi)
+    assert plain(derived(pop.instance(51), "actual_orientation")) == pytest.approx([30.0, 0.0, 0.0])
+    assert plain(derived(pop.instance(56), "actual_rotation")) == pytest.approx(-0.5 * 180 / math.pi)
     pop = Population(read_step(mechanism_1996(DEGREE, skew="30.")), "p105")
-    assert pop.evaluator.where_rule(pop.instance(52), "universal_pair", "wr1") is True
+    assert evaluator(pop).where_rule(pop.instance(52), "universal_pair", "wr1") is True
 
 
 @pytest.mark.parametrize("axis,angle", [
@@ -1015,10 +1030,10 @@ def test_convert_spatial_to_ypr_rotation_matches_placements(axis, angle):
     np = pytest.importorskip("numpy")
     from p105cli.kinematics.placements import convert_spatial_to_ypr_rotation
     pop = Population(read_step(mechanism_1996(axis=axis, angle=angle)), "p105")
-    got = plain(pop.instance(51).derived("actual_orientation"))
+    got = plain(derived(pop.instance(51), "actual_orientation"))
     want = [float(x) for x in convert_spatial_to_ypr_rotation(axis, angle)]
     assert np.allclose(got, want, atol=1e-12), (got, want)
-    assert pop.evaluator.where_rule(pop.instance(61), "rotation_about_direction", "wr1") is True
+    assert evaluator(pop).where_rule(pop.instance(61), "rotation_about_direction", "wr1") is True
 
 
 @needs_probes
@@ -1026,7 +1041,7 @@ def test_unique_and_global_rules_on_the_long_form():
     text = fixed_1996().replace("#25=MECHANISM(#13,#10,#23);",
                                 "#25=MECHANISM(#13,#10,#23);\n#26=PRISMATIC_PAIR('p',$,#8,#9,#12);")
     pop = Population(read_step(text))
-    ev = pop.evaluator
+    ev = evaluator(pop)
     groups = ev.unique_rule("kinematic_pair", "ur1")  # one pair per joint
     assert [[i.id for i in g] for g in groups] == [[14, 26]]
     assert ev.unique_rule("kinematic_link_representation_relation", "ur1") == []

@@ -196,5 +196,6 @@ def test_configuration_sequences_against_the_corpus_solver(key, profile):
     for rec, want in zip(recs, expect):
         assert set(rec["pairs"]) == set(names)
         for n in names:
-            assert rec["pairs"][n] == pytest.approx(want[n], rel=1e-12, abs=1e-13)
+            # the file holds the solver's values to 12 significant digits (p105cli.corpus.digits)
+            assert rec["pairs"][n] == pytest.approx(want[n], rel=5e-12, abs=5e-11)
     assert recs[1]["interpolation"] == "linear" and recs[1]["prescribed"] is True

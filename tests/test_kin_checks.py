@@ -21,6 +21,7 @@ from pathlib import Path
 import pytest
 
 from p105cli.rules.kinematics import RULES, check_kinematics, context_units
+from p105cli.schema.evaluator import Evaluator
 from p105cli.schema.population import Population
 from p105cli.step import read_step
 
@@ -327,7 +328,7 @@ def test_unit_factor_matches_the_schema_function():
     """plane_angle_for_pair_in_radian (5.5.7), evaluated from the 1996 EXPRESS, agrees."""
     for units, expected in (("(#1,#2,#3)", 1.0), ("(#1,#42,#3)", DEG)):
         pop = pop_of(make("1996", {4: COMMON[4].replace("(#1,#2,#3)", units)}))
-        got = pop.evaluator.call("plane_angle_for_pair_in_radian", pop.instance(14), 1.0)
+        got = Evaluator(pop).call("plane_angle_for_pair_in_radian", pop.instance(14), 1.0)
         got = getattr(got, "value", got)
         assert math.isclose(float(got), expected, rel_tol=1e-14)
         assert math.isclose(context_units(pop, 4).angle[0], float(got), rel_tol=1e-15)

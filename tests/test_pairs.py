@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 from p105cli.corpus import geometry as cgeo
 from p105cli.corpus import mechanisms as cmech
 from p105cli.kinematics import pairs
-from p105cli.kinematics.pairs import PAIR_KINDS, PAIRS, UnsupportedPairError, adjoint, hat, pair_type, vee
+from p105cli.kinematics.pairs import PAIR_KINDS, PAIRS, UnsupportedPairError, pair_type
+from p105cli.kinematics.spatial import adjoint, hat, vee
 from p105cli.kinematics.placements import (
     compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, ypr_rotation,
 )

@@ -6,19 +6,40 @@ the JSON model as input, and a 9 MB real file."""
 
 from __future__ import annotations
 
+import functools
 import io
 from pathlib import Path
 
 import pytest
 
 from conftest import CORPUS
+import p105cli.schema as schema_pkg
 from p105cli.schema import SchemaError
-from p105cli.schema.evaluator import INDETERMINATE, Agg
+from p105cli.schema.evaluator import INDETERMINATE, Agg, Evaluator
 from p105cli.schema.population import Instance, Population
 from p105cli.schema.profiles import (
     DATA_DIR, KNOWN_PROFILES, UnknownSchemaError, get_profile, profile_for_header,
 )
 from p105cli.step import read_json, read_step, write_json
+
+
+@functools.cache
+def evaluator(pop) -> Evaluator:
+    """One evaluator per population, as the validator keeps one."""
+    return Evaluator(pop)
+
+
+def derived(inst, name):
+    return evaluator(inst.pop).derived_value(inst, name)
+
+
+def inverse(inst, name):
+    return evaluator(inst.pop).inverse_value(inst, name)
+
+
+def value(inst, name):
+    return evaluator(inst.pop).attribute(inst, name)
+
 
 AUTHORED = CORPUS / "authored"
 # the read-only research probes of the shared corpus (examples/ may evolve)
@@ -160,9 +181,9 @@ def test_complex_unit_instance(pop214):
     rad = pop214.instance(2)
     assert rad.get("prefix") is None and rad.get("name") == {"enum": "RADIAN"}
     # the derived dimensions (si_unit re-derives named_unit.dimensions)
-    dims = mm.derived("dimensions")
+    dims = derived(mm, "dimensions")
     assert dims.types == {"dimensional_exponents"}
-    ev = pop214.evaluator
+    ev = evaluator(pop214)
     assert ev.attribute(dims, "length_exponent") == 1.0
     assert ev.attribute(dims, "mass_exponent") == 0.0
     with pytest.raises(SchemaError):
@@ -177,12 +198,12 @@ def test_complex_context_instance(pop214):
     assert ctx.get("context_type") == "3D"
     assert ctx.get("coordinate_space_dimension") == 3
     assert ctx.get("units") == [{"ref": 1}, {"ref": 2}, {"ref": 3}]
-    units = ctx.value("units")
+    units = value(ctx, "units")
     assert isinstance(units, Agg) and units.kind == "set"
     assert [u.id for u in units] == [1, 2, 3]
     assert all(isinstance(u, Instance) for u in units)
     # INVERSE representation_context.representations_in_context
-    reps = ctx.inverse("representations_in_context")
+    reps = inverse(ctx, "representations_in_context")
     assert sorted(r.id for r in reps) == [17, 18]
 
 
@@ -249,13 +270,13 @@ def test_derived_values_override_the_written_ones(pop242):
     # revolute_pair re-derives the freedoms: the written .T./.F. do not matter
     for pop in (pop242, population(STAR_PROBE)):
         pair = pop.instance(15)
-        assert [pair.derived(a) for a in ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")] == [
+        assert [derived(pair, a) for a in ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")] == [
             False, False, False, False, False, True]
         # kinematic_pair: item_defined_transformation.name := representation_item.name
-        assert pair.value("name") == "j1"
-        assert pair.derived("name") == "j1"
-        assert [r.id for r in pair.derived("associated_link_representations_1")] == [13]
-        assert [r.id for r in pair.derived("associated_link_representations_2")] == [14]
+        assert value(pair, "name") == "j1"
+        assert derived(pair, "name") == "j1"
+        assert [r.id for r in derived(pair, "associated_link_representations_1")] == [13]
+        assert [r.id for r in derived(pair, "associated_link_representations_2")] == [14]
 
 
 def test_record_and_offset(pop214):
@@ -309,27 +330,27 @@ def test_usedin_counts_each_role_once_per_referrer(pop214):
 
 def test_inverse_attributes(pop214, pop242):
     joint = pop214.instance(12)
-    assert joint.inverse("structure").id == 13  # single-valued inverse
-    assert pop214.instance(17).inverse("link_representation_relation") is INDETERMINATE
+    assert inverse(joint, "structure").id == 13  # single-valued inverse
+    assert inverse(pop214.instance(17), "link_representation_relation") is INDETERMINATE
     pair = pop242.instance(15)
-    inv = pair.inverse("link_representation_associations")
+    inv = inverse(pair, "link_representation_associations")
     assert isinstance(inv, Agg) and inv.kind == "set" and [i.id for i in inv] == [16]
     with pytest.raises(SchemaError):
-        pair.inverse("joint")  # explicit, not inverse
+        inverse(pair, "joint")  # explicit, not inverse
     with pytest.raises(SchemaError):
-        pair.derived("no_such")
+        derived(pair, "no_such")
 
 
 def test_derived_attributes(pop214, pop242):
     pair = pop214.instance(14)
-    assert pair.derived("pair_placement_in_first_link_context").id == 8
-    assert pair.derived("pair_placement_in_second_link_context").id == 9
-    assert pop214.instance(17).derived("link_frame").id == 4
+    assert derived(pair, "pair_placement_in_first_link_context").id == 8
+    assert derived(pair, "pair_placement_in_second_link_context").id == 9
+    assert derived(pop214.instance(17), "link_frame").id == 4
     mech = pop242.instance(18)
-    assert [j.id for j in mech.derived("represented_joints")] == [12]
+    assert [j.id for j in derived(mech, "represented_joints")] == [12]
     state = pop242.instance(20)  # context_of_items derived from the mechanism
-    assert state.derived("context_of_items").id == 4
-    assert pop242.instance(8).derived("dim") == 3
+    assert derived(state, "context_of_items").id == 4
+    assert derived(pop242.instance(8), "dim") == 3
 
 
 # --------------------------------------------------------------------------
@@ -347,7 +368,7 @@ def test_population_from_json_model(pop242):
     assert pop.types_of(4) == pop242.types_of(4)
     assert pop.instance(4).get("units") == [{"ref": 1}, {"ref": 2}, {"ref": 3}]
     assert [i.id for i in pop.usedin(10)] == [12, 13]
-    assert pop.instance(15).derived("r_z") is True
+    assert derived(pop.instance(15), "r_z") is True
     assert pop.instance(1).offset is None
     # and a plain list of records with an explicit profile
     pop2 = Population(doc.data, "ap242")
@@ -378,4 +399,40 @@ def test_big_file_population_and_ids_of_type():
     assert len(pop.ids_of_type("named_unit")) >= 3
     p = pop.instance(ids[0])
     assert p.get("coordinates") and len(p.get("coordinates")) == 3
-    assert pop.evaluator.where_rule(p, "geometric_representation_item", "wr1") is True
+    assert evaluator(pop).where_rule(p, "geometric_representation_item", "wr1") is True
+
+
+# --------------------------------------------------------------------------
+# the population knows nothing of the evaluator
+
+
+def _imported_modules(path: Path) -> set:
+    """Every module a source file imports, at the top or inside a function (relative ones resolved)."""
+    import ast
+    root = Path(schema_pkg.__file__).parents[2]            # the directory holding p105cli/
+    package = list(path.parent.relative_to(root).parts)    # e.g. p105cli, schema, evaluator
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            out.add(mod)
+            out.update(f"{mod}.{a.name}" for a in node.names)
+    return out
+
+
+def test_no_import_between_population_and_evaluator():
+    """The evaluator is given a population; neither imports the other, not even lazily."""
+    schema_dir = Path(schema_pkg.__file__).parent
+    for name in ("population.py", "instance.py"):
+        mods = _imported_modules(schema_dir / name)
+        assert not any(m.startswith("p105cli.schema.evaluator") for m in mods), (name, mods)
+    evaluator_files = sorted((schema_dir / "evaluator").glob("*.py"))
+    assert len(evaluator_files) > 5
+    for path in evaluator_files:
+        mods = _imported_modules(path)
+        assert "p105cli.schema.instance" in mods or path.name in (
+            "__init__.py", "core.py", "scope.py"), (path.name, mods)
+        assert not any(m.startswith("p105cli.schema.population") for m in mods), (path.name, mods)

@@ -71,6 +71,7 @@ from p105cli.part105.catalogue import APPLICATION as _APPLICATION
 from p105cli.part105.catalogue import PROFILES, SCHEMA_AP214, SCHEMA_AP242  # noqa: F401 (re-exported)
 
 from p105cli.part105.builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
+from .digits import round_records
 from .geometry import compose, su_parameters, ypr_angles
 from .mechanisms import Mechanism, configuration, pair_frames, resolved_limits, scalar_value
 
@@ -91,15 +92,17 @@ def header(mech: Mechanism, profile: str, filename: str) -> dict:
     }
 
 
-def records(mech: Mechanism, profile: str) -> list[dict]:
-    """The JSON-model records of ``mech`` in ``profile``."""
+def records(mech: Mechanism, profile: str, *, rounded: bool = True) -> list[dict]:
+    """The JSON-model records of ``mech`` in ``profile``; with ``rounded`` (the corpus files)
+    every computed real to :data:`~p105cli.corpus.digits.DIGITS` significant digits, so that
+    the files are the same bytes on every machine (see :mod:`p105cli.corpus.digits`)."""
     prof = PROFILES[profile]
     w = _Common(mech, profile)
     if prof["layout"] == "1996":
         _write_1996(w)
     else:
         _write_ap242(w)
-    return w.b.data
+    return round_records(w.b.data) if rounded else w.b.data
 
 
 # ------------------------------------------------------------------ shared part

@@ -277,43 +277,30 @@ def to_mechanism(table: DHTable, layout: str = "1996", name: Optional[str] = Non
 
 def serial_chain(mech: Mechanism) -> list:
     """The pairs from the base to the tip as ``[(pair, forward)]``, ``forward`` True when the
-    pair's first link is the one nearer the base. DHConversionError when the pairs do not
-    form one unbranched open chain from the base link."""
-    root = {ln: ln for ln in mech.link_names}
+    pair's first link is the one nearer the base: the spanning tree of
+    :func:`p105cli.kinematics.graph.topology`. DHConversionError when the pairs do not form
+    one unbranched open chain from the base link."""
+    from .graph import topology
 
-    def find(x):
-        while root[x] != x:
-            root[x] = root[root[x]]
-            x = root[x]
-        return x
-
-    for p in mech.pairs:  # the first pair that joins two links already joined closes a loop
-        r1, r2 = find(p.link1), find(p.link2)
-        if r1 == r2:
-            raise DHConversionError(f"pair {p.name!r} closes a loop (between {p.link1!r} and {p.link2!r}): "
-                                    "a DH table describes an open serial chain", p.name)
-        root[r1] = r2
-    touching = {ln: [] for ln in mech.link_names}
-    for p in mech.pairs:
-        touching[p.link1].append(p)
-        if p.link2 != p.link1:
-            touching[p.link2].append(p)
+    _, tree, _, _, chords, _ = topology(mech)
+    if chords:
+        p = _closing_pair(mech)
+        raise DHConversionError(f"pair {p.name!r} closes a loop (between {p.link1!r} and {p.link2!r}): "
+                                "a DH table describes an open serial chain", p.name)
+    children = {}
+    for k, parent, child, forward in tree:
+        children.setdefault(parent, []).append((mech.pairs[k], child, forward))
     chain, used = [], set()
     link = mech.base
-    while True:
-        nxt = [p for p in touching[link] if p.name not in used]
-        if not nxt:
-            break
+    while children.get(link):
+        nxt = children[link]
         if len(nxt) > 1:
             raise DHConversionError(
-                f"link {link!r} branches into pairs {', '.join(repr(p.name) for p in nxt)}: "
-                "a DH table describes one unbranched serial chain", nxt[1].name)
-        p = nxt[0]
-        forward = p.link1 == link
-        other = p.link2 if forward else p.link1
+                f"link {link!r} branches into pairs {', '.join(repr(p.name) for p, _, _ in nxt)}: "
+                "a DH table describes one unbranched serial chain", nxt[1][0].name)
+        p, link, forward = nxt[0]
         used.add(p.name)
         chain.append((p, forward))
-        link = other
     rest = [p for p in mech.pairs if p.name not in used]
     if rest:
         raise DHConversionError(f"pair {rest[0].name!r} is not on the serial chain from the base link "
@@ -323,6 +310,25 @@ def serial_chain(mech: Mechanism) -> list:
     return chain
 
 
+def _closing_pair(mech: Mechanism):
+    """The pair a loop is blamed on: the first, in model order, that joins two links already
+    joined by the pairs before it."""
+    root = {ln: ln for ln in mech.link_names}
+
+    def find(x):
+        while root[x] != x:
+            root[x] = root[root[x]]
+            x = root[x]
+        return x
+
+    for p in mech.pairs:
+        r1, r2 = find(p.link1), find(p.link2)
+        if r1 == r2:
+            return p
+        root[r1] = r2
+    raise AssertionError("no pair closes a loop")  # topology found a chord: unreachable
+
+
 def _oriented(pair: Pair, forward: bool, q) -> np.ndarray:
     T = pair.transform(np.asarray(q, dtype=np.float64)[..., None])
     return T if forward else inverse(T)
@@ -330,17 +336,25 @@ def _oriented(pair: Pair, forward: bool, q) -> np.ndarray:
 
 def chain_pose(mech: Mechanism, q, *, tool: str | None = "tool") -> np.ndarray:
     """End pose ``T_world_base . T_base_tip(q) . tip.frames[tool]`` (..., 4, 4) of a serial
-    chain of one-value pairs, ``q`` (..., n) in chain order (base to tip); the tool frame
-    is left out when the tip link has none (or ``tool`` is None)."""
+    chain of one-value pairs, ``q`` (..., n) in chain order (base to tip), by the solver's
+    forward kinematics; the tool frame is left out when the tip link has none (or ``tool``
+    is None)."""
+    from .solver import forward, plan
+
     chain = serial_chain(mech)
     q = np.asarray(q, dtype=np.float64)
     if q.ndim < 1 or q.shape[-1] != len(chain):
         raise ValueError(f"q must have shape (..., {len(chain)}), got {q.shape}")
-    T = np.broadcast_to(mech.T_world_base, q.shape[:-1] + (4, 4))
-    tip = mech.base
-    for k, (p, fwd) in enumerate(chain):
-        T = T @ _oriented(p, fwd, q[..., k])
-        tip = p.link2 if fwd else p.link1
+    many = [p.name for p, _ in chain if p.value_count != 1]
+    if many:
+        raise ValueError(f"pairs {many} have more than one value: q gives one per pair")
+    pl = plan(mech)
+    cols = [mech.value_slices[p.name].start for p, _ in chain]
+    Q = np.zeros((int(np.prod(q.shape[:-1], dtype=int)), pl.nv))
+    Q[:, cols] = q.reshape(-1, len(chain))
+    p, fwd = chain[-1]
+    tip = p.link2 if fwd else p.link1
+    T = forward(pl, Q)[:, pl.link_index[tip]].reshape(q.shape[:-1] + (4, 4))
     frame = None if tool is None else _named_frame(mech.link(tip), tool)
     return T if frame is None else T @ frame
 

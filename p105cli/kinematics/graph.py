@@ -30,20 +30,20 @@ work on any freedom); joint ``j`` carries it when the sum of the wrenches of
 the loops through ``j`` (signed by the traversal direction) is not zero.
 ``redundant_joints`` lists those joints.
 
-**Loop closure** (:func:`loop_closure`, also the solver's Newton system). For
-loop ``l`` starting at link ``a`` (the chord's first link), walking the pair
-transforms ``T_link1_link2(q)`` (inverted where a pair is crossed backwards)
-round the loop gives ``T_loop(q)``, the placement of link ``a`` reached
-round the loop in link ``a`` as it started; closed means ``T_loop = I``.
-The residual is ``r_l = (p, phi)``: ``p`` the translation of ``T_loop``
-(metres, in link ``a``'s frame) and ``phi`` the rotation vector of its
-rotation (radians, ``|phi| <= pi``). Its Jacobian with respect to the flat
-pair-value vector (:attr:`Mechanism.value_slices`) is exact:
-``dp = v + w x p`` and ``dphi = Jl(phi)^-1 w`` with ``(v, w)`` the spatial
-twist of ``T_loop`` (``vee(dT_loop T_loop^-1)``) and ``Jl`` the left
-Jacobian of SO(3). The twist of each pair is ``+-Ad(F) J_body`` with ``F``
-the placement of the pair's second pair frame
-(:meth:`PairType.motion_jacobian`, :func:`pairs.adjoint`).
+**Loop closure** is the solver's (:mod:`p105cli.kinematics.solver.closure`,
+the one loop residual). For loop ``l`` starting at link ``a`` (the chord's
+first link), walking the pair transforms ``T_link1_link2(q)`` (inverted where a
+pair is crossed backwards) round the loop gives ``T_loop(q)``, the placement of
+link ``a`` reached round the loop in link ``a`` as it started; closed means
+``T_loop = I``. The rank is taken on the loops' twist Jacobian (the spatial
+twist ``(v, w)`` of ``T_loop`` per value, ``solver.loop_twists``), each loop's
+rows turned into its component root's frame; the solver's residual ``(p / size,
+2 q_v)`` has the same rank and null space (its Jacobian is an invertible map of
+this one). :func:`loop_closure` is a view of the same loops in metres and
+radians, ``r_l = (p, phi)``: ``p`` the translation of ``T_loop`` (in link ``a``'s
+frame) and ``phi`` the rotation vector of its rotation (``|phi| <= pi``), with
+the exact Jacobian ``dp = v + w x p`` and ``dphi = Jl(phi)^-1 w`` (``Jl`` the
+left Jacobian of SO(3)).
 
 **Tolerances.** The rank is taken on a dimensionless Jacobian: translation
 rows divided, translation columns (values named ``*translation*``,
@@ -66,8 +66,9 @@ from typing import Optional
 
 import numpy as np
 
-from .pairs import UnsupportedPairError, adjoint
-from .placements import inverse, matrix_to_quaternion
+from .pairs import UnsupportedPairError
+from .solver import link_poses, loop_twists, plan
+from .spatial import adjoint, hat3, inverse, left_jacobian_inverse, rotation_vector
 
 __all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "rotation_vector",
            "length_columns", "structure_document", "to_dot", "to_graphml", "to_mermaid", "GRAPH_FORMAT"]
@@ -132,10 +133,7 @@ class Structure:
     closure_residual: float
     size: float
     notes: list = field(default_factory=list)
-    # internals for loop_closure: pair index per name, link parent edges
-    _pair_index: dict = field(default_factory=dict, repr=False)
-    _tree_idx: list = field(default_factory=list, repr=False)   # (pair index, parent, child, forward)
-    _roots: list = field(default_factory=list, repr=False)
+    _plan: object = field(default=None, repr=False)   # the compiled mechanism (loop_closure)
 
     @property
     def loop_count(self) -> int:
@@ -144,8 +142,12 @@ class Structure:
 
 # --------------------------------------------------------------------------- topology
 
-def _topology(mech):
-    """BFS spanning forest, chords and loops (names)."""
+def topology(mech):
+    """The spanning forest (breadth-first from the base link, then from each further component's
+    first link), chords and loops: ``(order, tree, roots, components, chords, loops)``, links by
+    name, pairs by index (``tree``: ``(pair, parent, child, forward)``; loops: ``(pair, forward)``).
+    The one spanning-tree walk: the solvers (:func:`p105cli.kinematics.solver.plan`) and the
+    model writer use it."""
     pairs = mech.pairs
     adj = {ln.name: [] for ln in mech.links}
     for k, p in enumerate(pairs):
@@ -206,37 +208,6 @@ def _topology(mech):
 
 # --------------------------------------------------------------------------- small numerics
 
-def _hat3(v):
-    v = np.asarray(v, dtype=np.float64)
-    out = np.zeros(v.shape + (3,))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
-
-
-def rotation_vector(R) -> np.ndarray:
-    """Rotation vector (..., 3) of rotation matrices (..., 3, 3): axis times angle in [0, pi]."""
-    q = matrix_to_quaternion(R)                 # w >= 0
-    w, v = q[..., 0], q[..., 1:]
-    s = np.linalg.norm(v, axis=-1)
-    angle = 2.0 * np.arctan2(s, w)
-    small = s < 1e-12
-    factor = np.where(small, 2.0 / np.where(w > 0.0, w, 1.0), angle / np.where(small, 1.0, s))
-    return v * factor[..., None]
-
-
-def _left_jacobian_inverse(phi) -> np.ndarray:
-    """``Jl(phi)^-1`` of SO(3): ``I - A/2 + c A^2``, ``A = [phi]x``."""
-    th = np.linalg.norm(phi, axis=-1)
-    A = _hat3(phi)
-    small = th < 1e-4
-    ths = np.where(small, 1.0, th)
-    c_big = 1.0 / ths ** 2 - (1.0 + np.cos(ths)) / (2.0 * ths * np.sin(ths))
-    c = np.where(small, 1.0 / 12.0 + th ** 2 / 720.0, c_big)
-    return np.eye(3) - 0.5 * A + c[..., None, None] * (A @ A)
-
-
 def length_columns(mech) -> np.ndarray:
     """Boolean mask (n,) of the flat value vector's length-valued entries (translations)."""
     mask = []
@@ -245,80 +216,30 @@ def length_columns(mech) -> np.ndarray:
     return np.array(mask, dtype=bool)
 
 
-# --------------------------------------------------------------------------- kinematics
-
-def _pair_kinematics(pair, qk):
-    """(T_link1_link2, body Jacobian) of one pair for values (..., f)."""
-    t = pair.type
-    params = pair.motion_params()
-    M = t.motion(qk, **params)
-    Jb = t.motion_jacobian(qk, frame="body", **params)
-    T = pair.P1 @ M @ inverse(pair.P2)
-    return T, Jb
-
-
-def _kinematics(mech, tree_idx, roots, q, slices, needed=None):
-    """Pair transforms, link placements in their component root's frame and pair screws.
-
-    ``needed``: pair indices to evaluate (None: all). Returns dicts ``T``,
-    ``S`` (pair -> (..., 6, f) screw in root coordinates), ``X`` (link ->
-    (..., 4, 4)), and the set of pairs whose motion is unsupported.
-    """
-    batch = q.shape[:-1]
-    T, Jb, bad = {}, {}, {}
-    for k, p in enumerate(mech.pairs):
-        if needed is not None and k not in needed:
-            continue
-        try:
-            T[k], Jb[k] = _pair_kinematics(p, q[..., slices[p.name]])
-        except (UnsupportedPairError, ValueError, TypeError) as err:
-            # no motion for this pair type, or parameters its motion refuses (e.g. a skew angle
-            # against WR1): the pair cannot take part in the rank analysis
-            bad[k] = str(err)
-    eye = np.broadcast_to(np.eye(4), batch + (4, 4))
-    X = {r: eye for r in roots}
-    for k, u, v, fwd in tree_idx:
-        if k not in T or X.get(u) is None:
-            X[v] = None
-            continue
-        X[v] = X[u] @ (T[k] if fwd else inverse(T[k]))
-    S = {}
-    for k in T:
-        p = mech.pairs[k]
-        X2 = X.get(p.link2)
-        if X2 is not None:
-            S[k] = adjoint(X2 @ p.P2) @ Jb[k]
-    return T, S, X, bad
-
-
-def _loop_parts(mech, loop, T, S, X, n, batch, slices):
-    """(T_loop, G, J_base) of one loop: G maps root coordinates into the walk from link a."""
-    pairs = mech.pairs
-    c = loop[0][0]
-    a, b = pairs[c].link1, pairs[c].link2
-    G = T[c] @ inverse(X[b])
-    T_loop = G @ X[a]
-    J = np.zeros(batch + (6, n))
-    for k, fwd in loop:
-        sl = slices[pairs[k].name]
-        if fwd:
-            J[..., :, sl] += S[k]
-        else:
-            J[..., :, sl] -= S[k]
-    return T_loop, G, J
-
+# --------------------------------------------------------------------------- loop closure
 
 def _residual_and_jacobian(T_loop, J_a):
+    """``(p, phi)`` of loop placements (..., 4, 4) and its Jacobian from the twist Jacobian
+    (..., 6, n) in the loop's start frame: ``dp = v + w x p``, ``dphi = Jl(phi)^-1 w``."""
     p = T_loop[..., :3, 3]
     phi = rotation_vector(T_loop[..., :3, :3])
     r = np.concatenate([p, phi], axis=-1)
-    Jv = J_a[..., :3, :] - _hat3(p) @ J_a[..., 3:, :]
-    Jw = _left_jacobian_inverse(phi) @ J_a[..., 3:, :]
+    Jv = J_a[..., :3, :] - hat3(p) @ J_a[..., 3:, :]
+    Jw = left_jacobian_inverse(phi) @ J_a[..., 3:, :]
     return r, np.concatenate([Jv, Jw], axis=-2)
 
 
+def _loop_twists(pl, Q, loops=None):
+    """:func:`solver.loop_twists`, a pair without a motion reported as UnsupportedPairError."""
+    try:
+        return loop_twists(pl, Q, loops)
+    except (UnsupportedPairError, ValueError, TypeError) as err:
+        raise UnsupportedPairError(f"loop closure needs the motion of pair(s) without one here ({err})") from err
+
+
 def loop_closure(mech, structure: Structure, q):
-    """Loop-closure residual and its Jacobian for pair values ``q`` (..., n).
+    """Loop-closure residual and its Jacobian for pair values ``q`` (..., n), in metres and
+    radians: a view on the solver's loops (:func:`p105cli.kinematics.solver.loop_twists`).
 
     Returns ``(r, J)``: ``r`` (..., 6 L) stacks ``(p, phi)`` per loop in
     ``structure.loops`` order (see the module docstring: translation of the
@@ -336,22 +257,9 @@ def loop_closure(mech, structure: Structure, q):
     L = len(structure.loops)
     if L == 0:
         return np.zeros(batch + (0,)), np.zeros(batch + (0, n))
-    idx = structure._pair_index
-    loops = [[(idx[name], fwd) for name, fwd in lp] for lp in structure.loops]
-    slices = mech.value_slices
-    T, S, X, bad = _kinematics(mech, structure._tree_idx, structure._roots, q, slices)
-    needed = {k for lp in loops for k, _ in lp}
-    missing = sorted(set(bad) & needed)
-    if missing:
-        why = "; ".join(f"{mech.pairs[k].name!r}: {bad[k]}" for k in missing)
-        raise UnsupportedPairError(f"loop closure needs the motion of pair(s) without one here ({why})")
-    rs, Js = [], []
-    for lp in loops:
-        T_loop, G, J = _loop_parts(mech, lp, T, S, X, n, batch, slices)
-        r, Jr = _residual_and_jacobian(T_loop, adjoint(G) @ J)
-        rs.append(r)
-        Js.append(Jr)
-    return np.concatenate(rs, axis=-1), np.concatenate(Js, axis=-2)
+    Tl, J = _loop_twists(structure._plan, q.reshape(-1, n))
+    r, Jr = _residual_and_jacobian(Tl, J.reshape(-1, L, 6, n))
+    return r.reshape(batch + (6 * L,)), Jr.reshape(batch + (6 * L, n))
 
 
 # --------------------------------------------------------------------------- analysis
@@ -366,15 +274,16 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         raise ValueError(f"tol must be a positive number, got {tol!r}")
     pairs = mech.pairs
     names = [p.name for p in pairs]
-    order, tree_idx, roots, comps, chords, loops = _topology(mech)
+    order, tree_idx, roots, comps, chords, loops = topology(mech)
+    pl = plan(mech)
     link_comp = {ln: ci for ci, comp in enumerate(comps) for ln in comp}
     n = mech.value_count
     slices = mech.value_slices
     size = float(mech.size())
     notes = []
 
-    q0 = mech.initial_vector()
-    T, S, X, bad = _kinematics(mech, tree_idx, roots, q0, slices)
+    X, T, bad = link_poses(pl, mech.initial_vector(), unsupported="skip")
+    X = {ln: X[i] for ln, i in pl.link_index.items()}
     for k in sorted(bad):
         notes.append(f"pair {names[k]!r} ({pairs[k].kind}): no motion available ({bad[k]}), "
                      "so the rank mobility of its component is not computed")
@@ -403,8 +312,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
             c.rank, c.redundant_constraints = 0, 0
             c.mobility = dof + (6 if floating else 0)
         elif not (set(cpairs) & set(bad)):
-            _rank_analysis(mech, c, [loops[li] for li in cloops], cpairs, T, S, X, n, slices,
-                           size, col_scale, tol)
+            _rank_analysis(mech, pl, c, cloops, cpairs, X, T, n, slices, size, col_scale, tol)
             worst_closure = max(worst_closure, c.closure_residual)
         components.append(c)
 
@@ -429,8 +337,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         kind="network" if loops else "tree", components=components, dof=n,
         mobility_gruebler=int(sum(c.mobility_gruebler for c in components)),
         mobility=mobility, redundant_constraints=redundant, redundant_joints=redundant_joints,
-        rank=rank, tol=rtol_used, closure_residual=worst_closure, size=size, notes=notes,
-        _pair_index={nm: k for k, nm in enumerate(names)}, _tree_idx=tree_idx, _roots=roots)
+        rank=rank, tol=rtol_used, closure_residual=worst_closure, size=size, notes=notes, _plan=pl)
 
 
 def _rank_rtol(tol, closure):
@@ -439,16 +346,27 @@ def _rank_rtol(tol, closure):
     return max(tol, min(100.0 * closure, 1e-4))
 
 
-def _rank_analysis(mech, comp: Component, loops, cpairs, T, S, X, n, slices, size, col_scale, tol):
-    """Rank, mobility, redundant constraints and the joints carrying them, for one component."""
+def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, X, T, n, slices, size, col_scale, tol):
+    """Rank, mobility, redundant constraints and the joints carrying them, for one component.
+
+    The Jacobian is the solver's loop closure (:func:`solver.loop_twists`; the residual's
+    Jacobian is an invertible map of it), each loop's rows turned from its start link's frame
+    into the component root's (``Ad(X_a)``), so that the self-stresses of different loops
+    add up as wrenches in one frame. The closure reported is that of the initial state as
+    forward kinematics places it (``X``, ``T``: :func:`solver.link_poses`): for the chord
+    from link a to link b, ``T_chord X_b^-1 X_a``, which is ``T_loop``."""
     pairs = mech.pairs
+    Tl, Jt = _loop_twists(pl, mech.initial_vector()[None], loop_ids)
     blocks, closure = [], 0.0
-    for lp in loops:
-        T_loop, G, J = _loop_parts(mech, lp, T, S, X, n, (), slices)
-        blocks.append(J)
+    for i, li in enumerate(loop_ids):
+        c = pl.loops[li][0][0]
+        a, b = pairs[c].link1, pairs[c].link2
+        blocks.append(adjoint(X[a]) @ Jt[0, 6 * i:6 * i + 6])
+        T_loop = T[c] @ inverse(X[b]) @ X[a]
         p = T_loop[:3, 3]
         phi = rotation_vector(T_loop[:3, :3])
         closure = max(closure, float(np.linalg.norm(p)) / size, float(np.linalg.norm(phi)))
+    loops = [pl.loops[li] for li in loop_ids]
     cols = np.concatenate([np.arange(n)[slices[pairs[k].name]] for k in cpairs]) if cpairs else \
         np.zeros(0, dtype=int)
     J = np.concatenate(blocks, axis=0)[:, cols]

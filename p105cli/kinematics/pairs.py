@@ -179,12 +179,12 @@ from typing import Callable
 
 import numpy as np
 
-from .placements import (compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform,
-                         ypr_rotation)
+from .placements import ypr_rotation
+from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform, vee
 
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
-    "hat", "vee", "adjoint", "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
+    "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
     "VALUE_UNITS",
 ]
 
@@ -199,46 +199,6 @@ class UnsupportedPairError(NotImplementedError):
 
 
 # --------------------------------------------------------------------------- twist helpers
-
-def hat(twist) -> np.ndarray:
-    """(..., 4, 4) matrix ``[[w^, v], [0, 0]]`` of twists (..., 6) ordered (v, w)."""
-    t = np.asarray(twist, dtype=np.float64)
-    out = np.zeros(t.shape[:-1] + (4, 4))
-    vx, vy, vz, wx, wy, wz = np.moveaxis(t, -1, 0)
-    out[..., 0, 1], out[..., 0, 2] = -wz, wy
-    out[..., 1, 0], out[..., 1, 2] = wz, -wx
-    out[..., 2, 0], out[..., 2, 1] = -wy, wx
-    out[..., 0, 3], out[..., 1, 3], out[..., 2, 3] = vx, vy, vz
-    return out
-
-
-def vee(X) -> np.ndarray:
-    """Inverse of :func:`hat`: (..., 6) twist (v, w) of (..., 4, 4) se(3) matrices.
-
-    The angular part is read from the antisymmetric part, so a matrix that
-    is only approximately in se(3) (a finite difference) gives its nearest twist.
-    """
-    X = np.asarray(X, dtype=np.float64)
-    w = 0.5 * np.stack([X[..., 2, 1] - X[..., 1, 2], X[..., 0, 2] - X[..., 2, 0],
-                        X[..., 1, 0] - X[..., 0, 1]], axis=-1)
-    return np.concatenate([X[..., :3, 3], w], axis=-1)
-
-
-def adjoint(T) -> np.ndarray:
-    """(..., 6, 6) adjoint of rigid transforms for twists ordered (v, w).
-
-    ``hat(adjoint(T) @ xi) = T @ hat(xi) @ inverse(T)``: it maps a body
-    twist of ``T`` to the spatial one.
-    """
-    T = np.asarray(T, dtype=np.float64)
-    R, p = T[..., :3, :3], T[..., :3, 3]
-    P = hat(np.concatenate([np.zeros(p.shape), p], axis=-1))[..., :3, :3]
-    out = np.zeros(T.shape[:-2] + (6, 6))
-    out[..., :3, :3] = R
-    out[..., 3:, 3:] = R
-    out[..., :3, 3:] = P @ R
-    return out
-
 
 def link_transform(P1, M, P2) -> np.ndarray:
     """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast)."""

@@ -27,9 +27,8 @@ Conventions (read these before using any function)
 Contents
 --------
 
-Elementary transforms: :func:`rot_x`, :func:`rot_y`, :func:`rot_z`,
-:func:`trans_x`, :func:`trans_y`, :func:`trans_z`, :func:`transform`,
-:func:`inverse`, :func:`compose`.
+Elementary transforms (:func:`rot_x` ... :func:`compose`), quaternions and
+:func:`slerp` are :mod:`p105cli.kinematics.spatial`'s, importable from here too.
 
 Part 105 / Part 42 placements: :func:`build_axes`, :func:`axis2_placement_3d`,
 :func:`su_parameters`, :func:`su_to_axis2_placement_3d`,
@@ -38,17 +37,21 @@ Part 105 / Part 42 placements: :func:`build_axes`, :func:`axis2_placement_3d`,
 :func:`convert_spatial_to_ypr_rotation`, :func:`plane_angle_to_radian`,
 :func:`radian_to_plane_angle`.
 
-Output conversions (always labelled): :func:`matrix_to_quaternion`,
-:func:`quaternion_to_matrix`, :func:`matrix_to_euler`, :func:`euler_to_matrix`
+Output conversions (always labelled): :func:`matrix_to_euler`, :func:`euler_to_matrix`
 (``"ZXZ"`` = Euler 3-1-3, ``"ZYZ"`` = Euler 3-2-3, ``"XYZ"`` = Cardan 1-2-3;
 all intrinsic, i.e. about the body-fixed, moving axes).
 """
 
 from __future__ import annotations
 
-from functools import reduce
-
 import numpy as np
+
+# The rotation algebra lives in spatial; its names stay importable from here.
+from .spatial import (  # noqa: F401
+    _f, _first_bad, _hom, _mat, _norm, _r3, _rot_part, _vec3,
+    compose, inverse, matrix_to_quaternion, quaternion_to_matrix, rot_x, rot_y, rot_z, slerp, trans_x,
+    trans_y, trans_z, transform,
+)
 
 __all__ = [
     "DEGREE",
@@ -81,50 +84,6 @@ _TWO_PI = 2.0 * np.pi
 
 # --------------------------------------------------------------------------- helpers
 
-def _f(x) -> np.ndarray:
-    return np.asarray(x, dtype=np.float64)
-
-
-def _vec3(x, name: str) -> np.ndarray:
-    a = _f(x)
-    if a.ndim < 1 or a.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
-    return a
-
-
-def _mat(x, name: str, n: int) -> np.ndarray:
-    a = _f(x)
-    if a.ndim < 2 or a.shape[-2:] != (n, n):
-        raise ValueError(f"{name} must have shape (..., {n}, {n}), got {a.shape}")
-    return a
-
-
-def _rot_part(x, name: str) -> np.ndarray:
-    """The rotation block of a (..., 3, 3) rotation or a (..., 4, 4) transform."""
-    a = _f(x)
-    if a.ndim >= 2 and a.shape[-2:] == (4, 4):
-        return a[..., :3, :3]
-    if a.ndim >= 2 and a.shape[-2:] == (3, 3):
-        return a
-    raise ValueError(f"{name} must have shape (..., 3, 3) or (..., 4, 4), got {a.shape}")
-
-
-def _norm(v: np.ndarray) -> np.ndarray:
-    """Euclidean norm of (..., 3) vectors without overflow or underflow."""
-    return np.hypot(np.hypot(v[..., 0], v[..., 1]), v[..., 2])
-
-
-def _first_bad(bad: np.ndarray) -> str:
-    """'at index (i, j)' for the first True of ``bad`` (and how many there are)."""
-    bad = np.asarray(bad)
-    if bad.ndim == 0:
-        return ""
-    idx = tuple(int(i) for i in np.argwhere(bad)[0])
-    n = int(np.count_nonzero(bad))
-    more = f" (and {n - 1} more)" if n > 1 else ""
-    return f" at index {idx}{more}"
-
-
 def _unit(v: np.ndarray, name: str, func: str) -> np.ndarray:
     n = _norm(v)
     bad = ~(np.isfinite(n) & (n > 0.0))
@@ -148,113 +107,6 @@ def _wrap_angle(x: np.ndarray) -> np.ndarray:
 def _scalar(x: np.ndarray):
     """A numpy scalar for 0-d results, the array otherwise."""
     return x[()] if isinstance(x, np.ndarray) and x.ndim == 0 else x
-
-
-def _r3(axis: int, angle) -> np.ndarray:
-    """(..., 3, 3) rotation by ``angle`` about coordinate axis 0 (x), 1 (y) or 2 (z)."""
-    a = _f(angle)
-    c, s = np.cos(a), np.sin(a)
-    R = np.zeros(a.shape + (3, 3))
-    i, j = ((1, 2), (2, 0), (0, 1))[axis]
-    R[..., axis, axis] = 1.0
-    R[..., i, i] = c
-    R[..., j, j] = c
-    R[..., i, j] = -s
-    R[..., j, i] = s
-    return R
-
-
-def _hom(R: np.ndarray, p: np.ndarray | None = None) -> np.ndarray:
-    """(..., 4, 4) from a (..., 3, 3) rotation and an optional (..., 3) translation."""
-    shape = R.shape[:-2] if p is None else np.broadcast_shapes(R.shape[:-2], p.shape[:-1])
-    T = np.zeros(shape + (4, 4))
-    T[..., :3, :3] = R
-    if p is not None:
-        T[..., :3, 3] = p
-    T[..., 3, 3] = 1.0
-    return T
-
-
-def _trans(axis: int, d) -> np.ndarray:
-    d = _f(d)
-    T = np.zeros(d.shape + (4, 4))
-    T[..., [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
-    T[..., axis, 3] = d
-    return T
-
-
-# --------------------------------------------------------------------------- elementary transforms
-
-def rot_x(angle) -> np.ndarray:
-    """``Rx(angle)``: (..., 4, 4) rotation about the x axis, angle in radians.
-
-    ``[[1, 0, 0], [0, c, -s], [0, s, c]]`` (active, counter-clockwise seen from +x;
-    ISO 10303-105 5.2.3).
-    """
-    return _hom(_r3(0, angle))
-
-
-def rot_y(angle) -> np.ndarray:
-    """``Ry(angle)``: (..., 4, 4) rotation about the y axis: ``[[c, 0, s], [0, 1, 0], [-s, 0, c]]``."""
-    return _hom(_r3(1, angle))
-
-
-def rot_z(angle) -> np.ndarray:
-    """``Rz(angle)``: (..., 4, 4) rotation about the z axis: ``[[c, -s, 0], [s, c, 0], [0, 0, 1]]``."""
-    return _hom(_r3(2, angle))
-
-
-def trans_x(d) -> np.ndarray:
-    """``Tx(d)``: (..., 4, 4) translation by ``d`` along x."""
-    return _trans(0, d)
-
-
-def trans_y(d) -> np.ndarray:
-    """``Ty(d)``: (..., 4, 4) translation by ``d`` along y."""
-    return _trans(1, d)
-
-
-def trans_z(d) -> np.ndarray:
-    """``Tz(d)``: (..., 4, 4) translation by ``d`` along z."""
-    return _trans(2, d)
-
-
-def transform(R, p=None) -> np.ndarray:
-    """``T = [[R, p], [0, 1]]``: (..., 4, 4) from a (..., 3, 3) rotation and a (..., 3) translation.
-
-    ``R`` and ``p`` broadcast; ``p=None`` means no translation. The rotation is
-    applied first, then the translation (as Part 105's ``transform``, 6.4.2).
-    """
-    R = _mat(R, "R", 3)
-    if p is None:
-        return _hom(R)
-    return _hom(R, _vec3(p, "p"))
-
-
-def inverse(T) -> np.ndarray:
-    """Rigid inverse ``T_b_a`` of ``T_a_b``: ``[[R^T, -R^T p], [0, 1]]``.
-
-    Exact for rigid transforms (uses the transpose, not ``np.linalg.inv``);
-    (..., 4, 4) in and out.
-    """
-    T = _mat(T, "T", 4)
-    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
-    out = np.zeros(T.shape)
-    out[..., :3, :3] = Rt
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, T[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
-
-
-def compose(*transforms) -> np.ndarray:
-    """Product left to right: ``compose(T_a_b, T_b_c, T_c_d) = T_a_d``.
-
-    Leading axes broadcast (a (4, 4) with a (5, 4, 4) gives (5, 4, 4)). Works
-    for (..., 3, 3) rotations as well.
-    """
-    if not transforms:
-        raise ValueError("compose: needs at least one transform")
-    return reduce(np.matmul, (_f(t) for t in transforms))
 
 
 # --------------------------------------------------------------------------- axis2_placement_3d
@@ -630,110 +482,6 @@ def radian_to_plane_angle(value, unit_factor=1.0):
     if not np.all(np.isfinite(uf) & (uf > 0.0)):
         raise ValueError("radian_to_plane_angle: unit_factor must be finite and > 0")
     return _scalar(_f(value) / uf)
-
-
-# --------------------------------------------------------------------------- quaternions
-
-def _check_order(order: str) -> str:
-    if order not in ("wxyz", "xyzw"):
-        raise ValueError(f"quaternion order must be 'wxyz' or 'xyzw', got {order!r}")
-    return order
-
-
-def matrix_to_quaternion(R, order: str = "wxyz") -> np.ndarray:
-    """Unit quaternion (..., 4) of a rotation matrix, Shepperd's method.
-
-    ``order="wxyz"`` (scalar first, the default) or ``"xyzw"`` (scalar last,
-    scipy's ``as_quat`` layout). The quaternion rotates vectors as ``R`` does
-    (Hamilton convention, ``R = quaternion_to_matrix(q)``).
-
-    Shepperd: of the four expressions 4w^2 = 1 + tr, 4x^2 = 1 + 2 R00 - tr,
-    ... the largest is used as the pivot, so no division by a small number
-    occurs; the result is normalised. Sign convention: ``w >= 0``; when
-    ``w == 0`` (half-turns) the first non-zero of x, y, z is positive (as
-    scipy's ``as_quat(canonical=True)``). Accepts (..., 3, 3) or (..., 4, 4).
-    """
-    order = _check_order(order)
-    R = _rot_part(R, "R")
-    r00, r01, r02 = R[..., 0, 0], R[..., 0, 1], R[..., 0, 2]
-    r10, r11, r12 = R[..., 1, 0], R[..., 1, 1], R[..., 1, 2]
-    r20, r21, r22 = R[..., 2, 0], R[..., 2, 1], R[..., 2, 2]
-    tr = r00 + r11 + r22
-    # rows: 4*q_pivot*(w, x, y, z) for pivot w, x, y, z
-    cand = np.stack([
-        np.stack([1.0 + tr, r21 - r12, r02 - r20, r10 - r01], axis=-1),
-        np.stack([r21 - r12, 1.0 + 2.0 * r00 - tr, r01 + r10, r02 + r20], axis=-1),
-        np.stack([r02 - r20, r01 + r10, 1.0 + 2.0 * r11 - tr, r12 + r21], axis=-1),
-        np.stack([r10 - r01, r02 + r20, r12 + r21, 1.0 + 2.0 * r22 - tr], axis=-1),
-    ], axis=-2)
-    pivot = np.argmax(np.stack([tr, r00, r11, r22], axis=-1), axis=-1)
-    q = np.take_along_axis(cand, pivot[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    nz = q != 0.0
-    first = np.take_along_axis(q, np.argmax(nz, axis=-1)[..., None], axis=-1)
-    q = np.where(first < 0.0, -q, q) + 0.0
-    if order == "xyzw":
-        q = q[..., [1, 2, 3, 0]]
-    return q
-
-
-def quaternion_to_matrix(q, order: str = "wxyz") -> np.ndarray:
-    """(..., 3, 3) rotation matrix of a quaternion (normalised first; Hamilton convention).
-
-    ``order`` as in :func:`matrix_to_quaternion`. ``q`` and ``-q`` give the
-    same matrix. Raises ``ValueError`` for a zero quaternion.
-    """
-    order = _check_order(order)
-    q = _f(q)
-    if q.ndim < 1 or q.shape[-1] != 4:
-        raise ValueError(f"q must have shape (..., 4), got {q.shape}")
-    if order == "xyzw":
-        q = q[..., [3, 0, 1, 2]]
-    n = np.linalg.norm(q, axis=-1)
-    bad = ~(np.isfinite(n) & (n > 0.0))
-    if np.any(bad):
-        raise ValueError(f"quaternion_to_matrix: zero or non-finite quaternion{_first_bad(bad)}")
-    w, x, y, z = np.moveaxis(q / n[..., None], -1, 0)
-    R = np.empty(w.shape + (3, 3))
-    R[..., 0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    R[..., 0, 1] = 2.0 * (x * y - z * w)
-    R[..., 0, 2] = 2.0 * (x * z + y * w)
-    R[..., 1, 0] = 2.0 * (x * y + z * w)
-    R[..., 1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    R[..., 1, 2] = 2.0 * (y * z - x * w)
-    R[..., 2, 0] = 2.0 * (x * z - y * w)
-    R[..., 2, 1] = 2.0 * (y * z + x * w)
-    R[..., 2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    return R
-
-
-def slerp(R0, R1, s) -> np.ndarray:
-    """Spherical linear interpolation between rotations: (..., 3, 3), exact at s = 0 and 1.
-
-    ``R0``, ``R1``: (..., 3, 3) or (..., 4, 4) (rotation part used); ``s``:
-    fractions in [0, 1] broadcasting with their leading axes. Interpolates
-    the unit quaternions along the shorter great arc (constant angular
-    velocity about a fixed axis), so ``slerp(R0, R1, 0) = R0`` and
-    ``slerp(R0, R1, 1) = R1``; never interpolates angles. For nearly equal
-    rotations (angle below 1e-8 rad) the normalised linear blend of the
-    quaternions is used, which agrees with slerp to rounding there.
-    """
-    q0 = matrix_to_quaternion(R0)
-    q1 = matrix_to_quaternion(R1)
-    s = _f(s)
-    dot = np.sum(q0 * q1, axis=-1)
-    q1 = np.where((dot < 0.0)[..., None], -q1, q1)  # the shorter arc
-    dot = np.abs(dot)
-    omega = np.arccos(np.clip(dot, -1.0, 1.0))
-    small = omega < 1e-8
-    sin_omega = np.where(small, 1.0, np.sin(omega))
-    w0 = np.where(small, 1.0 - s, np.sin((1.0 - s) * omega) / sin_omega)
-    w1 = np.where(small, s, np.sin(s * omega) / sin_omega)
-    q = w0[..., None] * q0 + w1[..., None] * q1
-    R = quaternion_to_matrix(q)
-    # the end rotations exactly, not through a quaternion round trip
-    R = np.where((s == 0.0)[..., None, None], _rot_part(R0, "R0"), R)
-    return np.where((s == 1.0)[..., None, None], _rot_part(R1, "R1"), R)
 
 
 # --------------------------------------------------------------------------- Euler / Cardan angles

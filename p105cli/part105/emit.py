@@ -166,7 +166,7 @@ class Emitter:
     def write_geometry(self, obj):
         """Records of a curve or surface object (metres, radians) in file units; its reference."""
         from p105cli.kinematics import geometry as G
-        from p105cli.kinematics.geometry_step import curve_records, surface_records
+        from .geometry import curve_records, surface_records
 
         surface = isinstance(obj, (G.Plane, G.CylindricalSurface, G.ConicalSurface, G.SphericalSurface,
                                    G.ToroidalSurface, G.BSplineSurface))

@@ -64,7 +64,7 @@ import math
 
 import numpy as np
 
-from p105cli.kinematics.placements import compose, inverse
+from p105cli.kinematics.placements import compose
 from p105cli.step.values import ref_id
 
 from .catalogue import APPLICATION, PROFILES
@@ -139,26 +139,16 @@ _PREFIX_FACTOR = {None: 1.0, "milli": 1e-3, "centi": 1e-2, "deci": 1e-1, "kilo":
 # ------------------------------------------------------------------ self-contained files
 
 def _forward_poses(mech) -> dict:
-    """``{link: T_base_link}`` at the initial state, breadth-first over the pairs from the
-    base (a loop's closing pair is not used; links not reached stay at the identity)."""
-    poses = {mech.base: np.eye(4)}
-    todo = [mech.base]
-    while todo:
-        here = todo.pop(0)
-        for p in mech.pairs:
-            if here not in (p.link1, p.link2):
-                continue
-            other = p.link2 if p.link1 == here else p.link1
-            if other in poses:
-                continue
-            q = np.asarray(mech.initial.get(p.name, (0.0,) * p.value_count), float)
-            try:
-                T12 = p.transform(q)
-            except Exception:  # a pair whose motion is not implemented: place it at the identity
-                T12 = np.eye(4)
-            poses[other] = compose(poses[here], T12 if p.link1 == here else inverse(T12))
-            todo.append(other)
-    return {ln.name: poses.get(ln.name, np.eye(4)) for ln in mech.links}
+    """``{link: T_base_link}`` at the initial state, by the solver's forward kinematics
+    (:func:`p105cli.kinematics.solver.link_poses`) along the spanning tree from the base (a
+    loop's closing pair is not used; a part not connected to the base is placed from its
+    first link). A pair whose motion is not a function of its values (a rolling surface
+    pair) places its second link at its first's."""
+    from p105cli.kinematics.solver import link_poses, plan
+
+    pl = plan(mech)
+    X, _, _ = link_poses(pl, mech.initial_vector(), unsupported="identity")
+    return {ln: X[i] for ln, i in pl.link_index.items()}
 
 
 def _standalone(mech, profile, occt_compat, diags):

@@ -8,7 +8,7 @@ What is checked, in order:
   (``conformance.py``: arity, types, selects, bounds, ``*`` and ``$``,
   references, complex instances);
 * the schema's own WHERE, UNIQUE and global rules, evaluated from the
-  EXPRESS text (``schema/evaluator.py``) on the *kinematic closure*: every
+  EXPRESS text (``schema/evaluator/``) on the *kinematic closure*: every
   instance of a Part 105 entity and every instance it references,
   transitively. Geometry that no kinematic entity uses is checked for
   conformance but its rules are not evaluated (a 200k-instance CAD file
@@ -139,9 +139,9 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
 
 
 def _evaluate_rules(pop, profile, v: Validation) -> None:
-    from p105cli.schema.evaluator import NotEvaluable
+    from p105cli.schema.evaluator import Evaluator, NotEvaluable
 
-    ev = pop.evaluator
+    ev = Evaluator(pop)
     schema = profile.schema
     closure = kinematic_closure(pop)
     present_types: set = set()

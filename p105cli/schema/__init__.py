@@ -2,7 +2,9 @@
 
 A science module: no click, no numpy (it is imported on the CLI's start-up
 path). ``load_schema(path)`` is the usual entry point; see ``express.py``
-for the parser and ``model.py`` for the data model.
+(entry points, cache), ``tokenizer.py`` and ``parser.py`` for the reader,
+``model.py`` for the data model, ``population.py`` and ``instance.py`` for
+a model file seen through a schema, and ``evaluator/`` for EXPRESS run on it.
 """
 
 from .express import (  # noqa: F401
