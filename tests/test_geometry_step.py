@@ -1,4 +1,4 @@
-"""Part 42 instances <-> geometry objects (p105cli.kinematics.geometry_step).
+"""Part 42 instances <-> geometry objects (p105cli.part105.geometry).
 
 Round trips object -> p105/1 records -> Population -> object for every supported type (compared by
 evaluating both at sample parameters), the records against the Part 21 argument orders of the AP242
@@ -16,7 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from p105cli.kinematics import geometry as G
-from p105cli.kinematics.geometry_step import curve_from_instance, curve_records, surface_from_instance, \
+from p105cli.part105.geometry import curve_from_instance, curve_records, surface_from_instance, \
     surface_records
 from p105cli.schema.population import Population
 from p105cli.step import read_step

@@ -1,4 +1,4 @@
-"""kinematics/reader.py: Part 21 / JSON -> the schema-neutral Mechanism model.
+"""part105/read_mechanism.py: Part 21 / JSON -> the schema-neutral Mechanism model.
 
 Independent truth: the authored corpus (tests/data/corpus) describes seven
 mechanisms in three layouts; ``p105cli.corpus.mechanisms`` holds their
@@ -23,7 +23,7 @@ from p105cli.corpus.mechanisms import (MECHANISMS, Z_TO_X, configuration, pair_f
                                        scalar_value)
 from p105cli.kinematics.model import Mechanism
 from p105cli.kinematics.placements import inverse
-from p105cli.kinematics.reader import read_mechanism, read_mechanisms
+from p105cli.part105.read_mechanism import read_mechanism, read_mechanisms
 from p105cli.step import DataSection, JsonDocument, ModelError, read_step
 
 CORPUS_DIR = Path(__file__).resolve().parent / "data" / "corpus"

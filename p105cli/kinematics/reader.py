@@ -5,6 +5,8 @@ re-export keeps ``kinematics/writer.py``, ``kinematics/motion_io.py``, ``cli/`` 
 
 from ..part105.catalogue import HIGHER_PAIR_ENTITIES, pair_kind_of_entity  # noqa: F401
 from ..part105.read_mechanism import PairValueReader, population, read_mechanism, read_mechanisms  # noqa: F401
+# the units the old reader exposed (motion_io reads a context's length unit through here)
+from ..schema.units import ANGLE, LENGTH, ContextUnits, context_units  # noqa: F401
 
 __all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "population", "HIGHER_PAIR_ENTITIES",
            "pair_kind_of_entity"]

@@ -13,7 +13,7 @@ from typing import NamedTuple, Optional
 __all__ = ["SCHEMA_AP214", "SCHEMA_AP242", "PROFILES", "APPLICATION", "layout_of", "choose_profile",
            "KINEMATIC_ENTITIES", "HIGHER_PAIR_ENTITIES", "HIGHER_KINDS", "pair_kind_of_entity",
            "pair_entity", "range_entity", "HIGHER_PAIR_GEOMETRY", "HIGHER_PAIR_ORIENTATION",
-           "GEOMETRY_ATTRIBUTES", "RangeOn", "RANGE_ON", "range_on_values", "Limit", "LIMITS",
+           "GEOMETRY_ATTRIBUTES", "HIGHER_PAIR_VALUES", "RangeOn", "RANGE_ON", "range_on_values", "Limit", "LIMITS",
            "LIMIT_SUFFIX", "YPR_NAMES", "limit_attributes"]
 
 #: FILE_SCHEMA names p105 writes for each long form.
@@ -169,6 +169,19 @@ HIGHER_PAIR_GEOMETRY = {
 #: Higher pairs with an ``orientation`` flag after their geometry.
 HIGHER_PAIR_ORIENTATION = frozenset({"point_on_planar_curve", "sliding_curve", "rolling_curve",
                                      "sliding_surface", "rolling_surface"})
+#: Higher pairs' ``*_pair_value`` attributes, in the order of the model's values: kind ->
+#: ((attribute, family, geometry key), ...); family ``"point"``: a point_on_curve /
+#: point_on_surface on the pair's curve/surface ``key`` (1 or 2 model values), ``"ypr"``: an
+#: orientation (yaw, pitch, roll), ``"A"``: a plane angle.
+HIGHER_PAIR_VALUES = {
+    "point_on_planar_curve": (("actual_point_on_curve", "point", "curve"), ("input_orientation", "ypr", None)),
+    "point_on_surface": (("actual_point_on_surface", "point", "surface"), ("input_orientation", "ypr", None)),
+    "sliding_curve": (("actual_point_on_curve_1", "point", "curve_1"), ("actual_point_on_curve_2", "point", "curve_2")),
+    "rolling_curve": (("actual_point_on_curve_1", "point", "curve_1"),),
+    "sliding_surface": (("actual_point_on_surface_1", "point", "surface_1"),
+                        ("actual_point_on_surface_2", "point", "surface_2"), ("actual_rotation", "A", None)),
+    "rolling_surface": (("actual_point_on_surface", "point", "surface_1"), ("actual_rotation", "A", None)),
+}
 #: geometry attribute -> (params key, which pair frame), over every higher pair
 GEOMETRY_ATTRIBUTES = {a: (key, which) for spec in HIGHER_PAIR_GEOMETRY.values() for a, key, which in spec}
 
@@ -262,27 +275,17 @@ def limit_attributes(value_name: str) -> Optional[tuple]:
 WRITTEN_LOW_KINDS = ("revolute", "prismatic", "screw", "cylindrical", "spherical", "universal", "homokinetic",
                      "planar", "unconstrained", "fully_constrained", "gear", "rack_and_pinion")
 
-#: Higher pairs: their geometry (params key, which pair frame it is given in), in the order of
-#: the pair's attributes; whether an ``orientation`` flag follows.
-HIGHER_GEOMETRY = {
-    "point_on_planar_curve": ((("curve", 1),), True),
-    "point_on_surface": ((("surface", 1),), False),
-    "sliding_curve": ((("curve_1", 1), ("curve_2", 2)), True),
-    "rolling_curve": ((("curve_1", 1), ("curve_2", 2)), True),
-    "sliding_surface": ((("surface_1", 1), ("surface_2", 2)), True),
-    "rolling_surface": ((("surface_1", 1), ("surface_2", 2)), True),
-}
+#: Higher pairs, as the writers use them: their geometry (params key, which pair frame it is
+#: given in), in the order of the pair's attributes, and whether an ``orientation`` flag
+#: follows (from HIGHER_PAIR_GEOMETRY and HIGHER_PAIR_ORIENTATION above).
+HIGHER_GEOMETRY = {kind: (tuple((key, which) for _attr, key, which in spec), kind in HIGHER_PAIR_ORIENTATION)
+                   for kind, spec in HIGHER_PAIR_GEOMETRY.items()}
 
-#: Higher pair values: ("point", geometry key) for a point on that curve/surface (1 or 2
-#: model values), "ypr" for an orientation (3 values), "A" for a plane angle.
-HIGHER_VALUES = {
-    "point_on_planar_curve": (("point", "curve"), "ypr"),
-    "point_on_surface": (("point", "surface"), "ypr"),
-    "sliding_curve": (("point", "curve_1"), ("point", "curve_2")),
-    "rolling_curve": (("point", "curve_1"),),
-    "sliding_surface": (("point", "surface_1"), ("point", "surface_2"), "A"),
-    "rolling_surface": (("point", "surface_1"), "A"),
-}
+#: Higher pair values, as the writers use them: ("point", geometry key) for a point on that
+#: curve/surface (1 or 2 model values), "ypr" for an orientation (3 values), "A" for a plane
+#: angle (from HIGHER_PAIR_VALUES above).
+HIGHER_VALUES = {kind: tuple(("point", key) if family == "point" else family for _attr, family, key in spec)
+                 for kind, spec in HIGHER_PAIR_VALUES.items()}
 
 #: Higher pairs whose limits are written: a trimmed curve / rectangular trimmed surface of the
 #: pair's geometry for the point parameter(s), and yaw, pitch, roll limits.

@@ -22,18 +22,18 @@ missing unit is an error only when a value of its kind is read.
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Optional
 
-import numpy as np
-
-from ..kinematics import placements as pl
-from ..kinematics.model import Units
 from ..schema.units import ANGLE, LENGTH, ContextUnits, UnitReader
 from ..schema.values import number as _num
 from ..schema.values import ref as _ref
 from ..schema.values import untyped as _untyped
 from ..step.errors import ModelError
 from .catalogue import choose_profile, layout_of
+
+# numpy and the kinematics maths are imported where a placement is computed: validating a file
+# (the lenient walk) never needs them
 
 __all__ = ["ModelFile", "ContextScale", "MISSING", "model_error", "open_population"]
 
@@ -119,8 +119,10 @@ class ContextScale:
             self._angle = self._factor(ANGLE)
         return self._angle
 
-    def units(self) -> Units:
+    def units(self) -> "Units":
         """The model's Units of this context (SI for a kind it does not give)."""
+        from ..kinematics.model import Units
+
         lu, au = self.cu.length, self.cu.angle
         return Units(length=float(lu[0]) if lu else 1.0, angle=float(au[0]) if au else 1.0,
                      length_name=lu[1] if lu else "metre", angle_name=au[1] if au else "radian")
@@ -137,23 +139,29 @@ class ModelFile:
             self.units, self._scales, self._cache = other.units, other._scales, other._cache
         else:
             self.pop, self.profile = open_population(doc, profile)
-            self.doc = doc
+            self.doc = getattr(self.pop, "doc", doc)
             self.units = UnitReader(self.pop)
             self._scales: dict = {}
             self._cache: dict = {}  # results computed once per file (the layout walk, ...)
+            # the population's model file: every reader given this population shares its walks
+            self.pop._part105_model_file = weakref.ref(self)
         self.schema = self.pop.schema
         self.layout = layout_of(self.profile)
         self.is_lenient = lenient
         self._lenient_view = self if lenient else None
         self._checked_view = None if lenient else self
-        self.source = getattr(doc, "source", None)
+        self.source = getattr(self.doc, "source", None) or getattr(doc, "source", None)
 
     @classmethod
     def of(cls, doc, profile=None, *, lenient: bool = False) -> "ModelFile":
         """``doc`` as a ModelFile (a ModelFile is returned as is, or its lenient view)."""
         if isinstance(doc, ModelFile):
             return doc.lenient() if lenient else doc
-        return cls(doc, profile, lenient=lenient)
+        known = getattr(doc, "_part105_model_file", None)  # a Population a ModelFile was built on
+        mf = known() if known is not None else None
+        if mf is None:
+            return cls(doc, profile, lenient=lenient)
+        return mf.lenient() if lenient else mf.checked()
 
     def lenient(self) -> "ModelFile":
         """The lenient view of this file (same population, same caches)."""
@@ -233,9 +241,12 @@ class ModelFile:
     def has(self, i, attr) -> bool:
         """``#i`` has attribute ``attr`` (set or not)."""
         try:
-            self.pop.instance(i).get(attr)
+            inst = self.pop.instance(i)
+            if inst.record is None:
+                return False
+            inst.get(attr)
             return True
-        except Exception:  # noqa: BLE001
+        except Exception:  # noqa: BLE001 - no such instance or attribute
             return False
 
     def ref(self, i, attr, *, optional: bool = False, types=None) -> Optional[int]:
@@ -360,9 +371,11 @@ class ModelFile:
         d = self.ref(i, attr, optional=True, types=("direction",))
         return None if d is None else self.vector(d, "direction_ratios")
 
-    def placement(self, i, scale: ContextScale) -> np.ndarray:
+    def placement(self, i, scale: ContextScale) -> "np.ndarray":
         """``#i`` (axis2_placement_3d, su_parameters or cartesian_transformation_operator_3d)
         as a 4x4 transform in metres; lengths and angles in ``scale``'s units."""
+        from ..kinematics import placements as pl
+
         t = self.types(i)
         if "su_parameters" in t and "su_parameters" not in self.schema.entities:
             raise model_error(i, f"su_parameters is not part of the {self._profile_name()} profile; "
@@ -397,8 +410,12 @@ class ModelFile:
         a, alpha, b, beta, c, gamma = (self.number(i, n) for n in ("a", "alpha", "b", "beta", "c", "gamma"))
         return (a * lf, alpha * af, b * lf, beta * af, c * lf, gamma * af)
 
-    def _cto3d(self, i, scale: ContextScale) -> np.ndarray:
+    def _cto3d(self, i, scale: ContextScale) -> "np.ndarray":
         """Part 42 ``cartesian_transformation_operator_3d`` as a rigid 4x4 (scale must be 1)."""
+        import numpy as np
+
+        from ..kinematics import placements as pl
+
         axes = {a: self.direction(i, a) for a in ("axis1", "axis2", "axis3")}
         raw_scale = self.get(i, "scale", None)
         s = _num(raw_scale) if raw_scale is not None else 1.0
@@ -415,8 +432,10 @@ class ModelFile:
         xyz = self.vector(loc, "coordinates")
         return pl.transform(R, [c * scale.length for c in xyz])
 
-    def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> np.ndarray:
+    def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> "np.ndarray":
         """``T_rep2_rep1`` of an item_defined_transformation: ``T(item_2) @ inv(T(item_1))``."""
+        from ..kinematics import placements as pl
+
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
         return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))

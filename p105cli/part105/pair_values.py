@@ -25,16 +25,20 @@ from ..kinematics import placements as pl
 from ..schema.values import number as _num
 from ..schema.values import ref as _ref
 from ..schema.values import untyped as _untyped
-from .catalogue import HIGHER_KINDS
+from .catalogue import HIGHER_KINDS, HIGHER_PAIR_VALUES
 from .model_file import ContextScale, ModelFile, model_error
 
-__all__ = ["PairValueFormat", "curve_parameter_factor", "surface_parameter_factors", "on_curve"]
+__all__ = ["PairValueFormat", "is_angle", "curve_parameter_factor", "surface_parameter_factors", "on_curve"]
 
 
-def _is_angle(value_name: str) -> bool:
+def is_angle(value_name: str) -> bool:
+    """A pair value attribute is a plane angle (``kinematics.pairs.VALUE_UNITS``, the one rule)."""
     from ..kinematics.pairs import VALUE_UNITS
 
     return VALUE_UNITS[value_name] == "A"
+
+
+_is_angle = is_angle
 
 
 class PairValueFormat:
@@ -144,25 +148,20 @@ class PairValueFormat:
 
     def _higher_value(self, v, pair, s: ContextScale, geometry: dict) -> tuple:
         d = self.d
-        kind = pair.kind
-        if kind == "point_on_planar_curve":
-            return (self._point_on_curve(v, "actual_point_on_curve", geometry["curve"]), *self._ypr(v, s))
-        if kind == "point_on_surface":
-            return (*self._point_on_surface(v, "actual_point_on_surface", geometry["surface"]),
-                    *self._ypr(v, s))
-        if kind == "sliding_curve":
-            return (self._point_on_curve(v, "actual_point_on_curve_1", geometry["curve_1"]),
-                    self._point_on_curve(v, "actual_point_on_curve_2", geometry["curve_2"]))
-        if kind == "rolling_curve":
-            return (self._point_on_curve(v, "actual_point_on_curve_1", geometry["curve_1"]),)
-        if kind == "sliding_surface":
-            return (*self._point_on_surface(v, "actual_point_on_surface_1", geometry["surface_1"]),
-                    *self._point_on_surface(v, "actual_point_on_surface_2", geometry["surface_2"]),
-                    d.number(v, "actual_rotation") * s.angle)
-        if kind == "rolling_surface":
-            return (*self._point_on_surface(v, "actual_point_on_surface", geometry["surface_1"]),
-                    d.number(v, "actual_rotation") * s.angle)
-        raise model_error(v, f"values of {kind} pairs are not read")
+        spec = HIGHER_PAIR_VALUES.get(pair.kind)
+        if spec is None:
+            raise model_error(v, f"values of {pair.kind} pairs are not read")
+        out: list = []
+        for attr, family, key in spec:
+            if family == "point" and key.startswith("curve"):
+                out.append(self._point_on_curve(v, attr, geometry[key]))
+            elif family == "point":
+                out.extend(self._point_on_surface(v, attr, geometry[key]))
+            elif family == "ypr":
+                out.extend(self._ypr(v, s))
+            else:  # "A": a plane angle
+                out.append(d.number(v, attr) * s.angle)
+        return tuple(out)
 
 
 def curve_parameter_factor(mf: ModelFile, c, s: ContextScale) -> float:

@@ -96,7 +96,7 @@ from . import layout as lay
 from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
     range_on_values
 from .model_file import ContextScale, ModelFile, model_error, open_population
-from .pair_values import PairValueFormat, on_curve, surface_parameter_factors
+from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
 __all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "population", "choose_mechanism"]
 
@@ -109,12 +109,6 @@ def _restated(e: ModelError, default_id) -> ModelError:
     if m:
         return model_error(int(m.group(1)), f"{m.group(2)}: {m.group(3)}")
     return model_error(default_id, e.message)
-
-
-def _is_angle(value_name: str) -> bool:
-    from ..kinematics.pairs import VALUE_UNITS
-
-    return VALUE_UNITS[value_name] == "A"
 
 
 class _PairRead:
@@ -448,10 +442,7 @@ class PairValueReader:
     @property
     def kinds(self) -> dict:
         """``{pair name: pair kind}`` of every pair of every mechanism."""
-        out = {}
-        for p in self._layouts.values():
-            out[p.name] = self._reader.pair(p).pair.kind
-        return out
+        return {p.name: self._reader._pair_kind(p.id)[0] for p in self._layouts.values()}
 
     def values(self, value_ids) -> dict:
         """``{pair name: values}`` of the pair value instances ``value_ids``."""

@@ -138,7 +138,7 @@ from typing import Optional
 
 from ..part105 import layout
 from ..part105.catalogue import KINEMATIC_ENTITIES, LIMITS, RANGE_ON, YPR_NAMES
-from ..part105.model_file import ModelFile
+from ..part105.model_file import MISSING, ModelFile
 from ..schema.units import ANGLE, KIND_SYMBOL as _KIND_SYMBOL, LENGTH, ContextUnits, UnitReader
 from ..schema.values import enum, is_false, is_unlimited, number, ref, untyped
 from ..step.values import refs_in as _refs_in
@@ -201,7 +201,7 @@ YPR_TOL = 1e-6       # relative, ypr angle against +-pi, +-pi/2
 ORTHO_TOL = 1e-6     # |cos| between axes that should be orthogonal
 FACTOR_TOL = 1e-9    # relative difference of two SI factors that still agree
 
-_MISSING = object()
+_MISSING = MISSING  # what the lenient ModelFile gives for an absent attribute
 
 
 # --------------------------------------------------------------------------- raw values
@@ -267,45 +267,26 @@ class _Kin:
         except Exception:  # noqa: BLE001 - an undecodable record is the reader's finding
             return None
 
+    # lenient access: the ModelFile's (an absent attribute is _MISSING, a bad reference None)
     def types(self, i) -> frozenset:
-        if i is None:
-            return frozenset()
-        try:
-            return self.pop.types_of(i)
-        except KeyError:
-            return frozenset()
+        return self.mf.types(i)
 
     def is_a(self, i, *names) -> bool:
-        t = self.types(i)
-        return any(n in t for n in names)
+        return self.mf.is_a(i, *names)
 
     def get(self, i, attr, default=_MISSING):
-        try:
-            inst = self.pop.instance(i)
-            if inst.record is None:
-                return default
-            return inst.get(attr)
-        except Exception:  # noqa: BLE001 - no such attribute / instance
-            return default
+        return self.mf.get(i, attr, default)
 
     def has(self, i, attr) -> bool:
-        return self.get(i, attr) is not _MISSING
+        return self.mf.get(i, attr) is not _MISSING
 
     def get_ref(self, i, *attrs) -> Optional[int]:
-        for a in attrs:
-            v = self.get(i, a)
-            if v is not _MISSING:
-                r = _ref(v)
-                if r is not None and r in self.pop:
-                    return r
-                return None
-        return None
+        """The reference of the first of ``attrs`` that ``#i`` has (None if it is no
+        reference to an instance of the file)."""
+        return self.mf.first_ref(i, *attrs)
 
     def names(self, i) -> list:
-        try:
-            return self.pop.instance(i).explicit_names()
-        except Exception:  # noqa: BLE001
-            return []
+        return self.mf.names(i)
 
     def label(self, i) -> Optional[str]:
         if i is None:

@@ -85,3 +85,20 @@ def test_choose_profile():
     assert c.choose_profile("ap214", False) == "ap214"
     assert c.choose_profile("ap242", True) == "ap242"
     assert c.choose_profile("p105", False) == "p105"
+
+
+def test_higher_pair_values_are_the_value_entities_attributes(schemas):
+    schema = schemas["ap242"]
+    for kind, spec in c.HIGHER_PAIR_VALUES.items():
+        ent = schema.entities[f"{kind}_pair_value"]
+        names = {a.name for a in ent.attributes}
+        n = 0
+        for attr, family, key in spec:
+            assert attr in names
+            assert family in ("point", "ypr", "A")
+            if family == "point":
+                assert key in {k for _a, k, _w in c.HIGHER_PAIR_GEOMETRY[kind]}
+                n += 1 if key.startswith("curve") else 2
+            else:
+                n += 3 if family == "ypr" else 1
+        assert n == len(PAIR_KINDS[kind].value_names)  # the model's values, in order

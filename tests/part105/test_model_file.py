@@ -80,3 +80,20 @@ def test_scale_of_a_link_representation(mf):
 def test_a_population_is_accepted():
     pop = Population(read_step(FOUR_BAR.read_text(), "x"))
     assert ModelFile.of(pop).profile == "ap242"
+
+
+def test_readers_given_one_population_share_one_model_file():
+    pop = Population(read_step(FOUR_BAR.read_text(), "x"))
+    mf = ModelFile.of(pop)
+    assert ModelFile.of(pop) is mf and ModelFile.of(pop, lenient=True) is mf.lenient()
+    from p105cli.part105 import layout
+    assert layout.mechanisms(ModelFile.of(pop)) is layout.mechanisms(mf)
+
+
+def test_the_validator_loads_no_numpy():
+    """The lenient walk needs no placement maths: validate starts without numpy."""
+    import subprocess
+    import sys
+    code = "import sys, p105cli.rules.validate; print('numpy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.stdout.strip() == "False", out.stderr
