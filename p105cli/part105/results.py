@@ -167,17 +167,15 @@ def _parameter_context(mf, mech_id, name, added, new_id):
     ctx = mf.ref(mech_id, "context_of_items")
     if ctx is None:
         raise ValueError("the mechanism representation has no context")
-    rec = mf.pop.instance(ctx).record
-    if "complex" in rec:
-        parts = [dict(p) for p in rec["complex"]]
+    inst = mf.pop.instance(ctx)
+    if inst.is_complex:  # the same parts, named ``name``
+        parts = [{**p, "args": list(p["args"])} for p in inst.record["complex"]]
+        slot = inst.layout.slots[inst.layout.by_name["context_identifier"][0]]
+        parts[slot.part]["args"][slot.pos] = name
     else:  # a geometric_representation_context as the parts of a complex instance
         parts = [{"type": "geometric_representation_context",
                   "args": [mf.get(ctx, "coordinate_space_dimension", None)]},
-                 {"type": "representation_context",
-                  "args": [mf.get(ctx, "context_identifier", None), mf.get(ctx, "context_type", None)]}]
-    for p in parts:
-        if p["type"] == "representation_context":
-            p["args"] = [name, *p["args"][1:]]
+                 {"type": "representation_context", "args": [name, mf.get(ctx, "context_type", None)]}]
     parts.append({"type": "geometric_representation_context_with_parameter", "args": [None]})
     parts.sort(key=lambda p: p["type"])
     added.append({"id": new_id, "complex": parts})
