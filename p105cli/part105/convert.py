@@ -49,6 +49,11 @@ _DIMENSIONS = {"length_unit": (1, 0, 0, 0, 0, 0, 0), "mass_unit": (0, 1, 0, 0, 0
 
 
 class Conversion:
+    """One conversion of ``source`` (the document ``mech`` was read from) to ``profile``: the
+    source's instances are read by attribute name through a lenient ModelFile over its typed
+    population, and their roles found through part105.layout and the population's back
+    references; :meth:`run` gives ``(header, records)`` and appends to ``diags``."""
+
     def __init__(self, mech, profile, source, occt_compat, diags):
         self.mech, self.profile, self.src, self.occt, self.diags = mech, profile, source, occt_compat, diags
         self.prof = PROFILES[profile]

@@ -3,7 +3,7 @@
 ``write_mechanism(mech, profile, *, source=None, occt_compat=False)``
 returns ``(JsonDocument, diagnostics)``.
 
-Profiles (the corpus's, :data:`p105cli.corpus.writers.PROFILES`):
+Profiles (:data:`p105cli.part105.catalogue.PROFILES`):
 
 * ``ap214`` - the Part 105:1996 layout as AP214's long form carries it
   (FILE_SCHEMA AUTOMOTIVE_DESIGN; pair frames are axis2_placement_3d only);
@@ -17,9 +17,11 @@ Two modes:
   assembly (links placed at the initial state), link representations, the
   pairs with their ranges and actuation (and the higher pairs' curves and
   surfaces), the base (placement), the initial state and, in AP242, the
-  loops. Built with the corpus's :class:`~p105cli.part105.builder.Builder`
-  (units, contexts, placements, products are written by the same code).
-* ``source`` = the document the mechanism was read from: a *conversion*.
+  loops. Built with :class:`~p105cli.part105.builder.Builder` (units,
+  contexts, placements, products) and the records of
+  :class:`~p105cli.part105.emit.Emitter` (the kinematics).
+* ``source`` = the document the mechanism was read from: a *conversion*
+  (:class:`~p105cli.part105.convert.Conversion`).
   Every instance outside the kinematic structure (products, shapes,
   geometry, units, contexts) is kept with its id; the kinematic instances
   are rewritten in the target layout; new instances get the ids of the
