@@ -37,7 +37,8 @@ pair is crossed backwards) round the loop gives ``T_loop(q)``, the placement of
 link ``a`` reached round the loop in link ``a`` as it started; closed means
 ``T_loop = I``. The rank is taken on the loops' twist Jacobian (the spatial
 twist ``(v, w)`` of ``T_loop`` per value, ``solver.loop_twists``), each loop's
-rows turned into its component root's frame; the solver's residual ``(p / size,
+rows turned into its component root's frame (``solver.root_loop_twists``: each
+pair's twist once, at the tree's placements); the solver's residual ``(p / size,
 2 q_v)`` has the same rank and null space (its Jacobian is an invertible map of
 this one). :func:`loop_closure` is a view of the same loops in metres and
 radians, ``r_l = (p, phi)``: ``p`` the translation of ``T_loop`` (in link ``a``'s
@@ -352,7 +353,7 @@ def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, q0, X, T, n, sli
 
     The Jacobian is the solver's loop closure (:func:`solver.loop_twists`; the residual's
     Jacobian is an invertible map of it), each loop's rows turned from its start link's frame
-    into the component root's (``Ad(X_a)``, :func:`solver.root_loop_twists`: each pair
+    into the component root's (``Ad(X_a)``; :func:`solver.root_loop_twists`, each pair
     evaluated once), so that the self-stresses of different loops add up as wrenches in one
     frame. The closure reported is that of the initial state as
     forward kinematics places it (``X``, ``T``: :func:`solver.link_poses`): for the chord

@@ -133,14 +133,14 @@ def loop_twists(pl: Plan, Q, loops=None):
 
 
 def root_loop_twists(pl: Plan, q, X, loops=None) -> np.ndarray:
-    """:func:`loop_twists`' Jacobian for one configuration ``q`` (nv,), each loop's rows turned
-    from its start link's frame into its component root's: (6L, nv). ``X``: the link
-    placements at ``q`` in their component root's frame (:func:`forward.link_poses`), by link
-    index. In the root's frame a factor's twist does not depend on the loop it lies on (pair
-    k forward: ``Ad(X_link1 P1 M) J_body = Ad(X_link2 P2) J_body``, backwards its negative),
-    so each pair on a loop is evaluated once and a loop's rows are the signed sum of its
-    pairs' twists (the structure analysis: the self-stresses of different loops add up as
-    wrenches in one frame)."""
+    """The loops' twist Jacobian for one configuration ``q`` (nv,) in each component root's
+    frame: (6L, nv). ``X``: the link placements at ``q`` in their component root's frame, by
+    link index (:func:`forward.link_poses`). Each pair on a loop is evaluated once, its twist
+    taken at the tree's placement of its second link (``Ad(X_link2 P2) J_body``, crossed
+    backwards its negative), and a loop's rows are the signed sum of its pairs' twists. Where
+    the loops close this is :func:`loop_twists` turned by ``Ad(X_a)`` (``X_a`` the loop's
+    start link); the structure analysis reads rank and self-stresses from it, the
+    self-stresses of different loops adding up as wrenches in one frame."""
     loops = range(len(pl.loops)) if loops is None else list(loops)
     q = np.asarray(q, dtype=np.float64)
     on_loop = sorted({k for li in loops for k, _ in pl.loops[li]})
