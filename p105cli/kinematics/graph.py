@@ -37,7 +37,8 @@ pair is crossed backwards) round the loop gives ``T_loop(q)``, the placement of
 link ``a`` reached round the loop in link ``a`` as it started; closed means
 ``T_loop = I``. The rank is taken on the loops' twist Jacobian (the spatial
 twist ``(v, w)`` of ``T_loop`` per value, ``solver.loop_twists``), each loop's
-rows turned into its component root's frame; the solver's residual ``(p / size,
+rows turned into its component root's frame (``solver.root_loop_twists``: each
+pair's twist once, at the tree's placements); the solver's residual ``(p / size,
 2 q_v)`` has the same rank and null space (its Jacobian is an invertible map of
 this one). :func:`loop_closure` is a view of the same loops in metres and
 radians, ``r_l = (p, phi)``: ``p`` the translation of ``T_loop`` (in link ``a``'s
@@ -67,8 +68,8 @@ from typing import Optional
 import numpy as np
 
 from .pairs import UnsupportedPairError
-from .solver import link_poses, loop_twists, plan
-from .spatial import adjoint, hat3, inverse, left_jacobian_inverse, rotation_vector
+from .solver import link_poses, loop_twists, plan, root_loop_twists
+from .spatial import hat3, inverse, left_jacobian_inverse, rotation_vector
 
 __all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "rotation_vector",
            "length_columns"]
@@ -277,9 +278,9 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
     order, tree_idx, roots, comps, chords, loops = topology(mech)
     pl = plan(mech)
     link_comp = {ln: ci for ci, comp in enumerate(comps) for ln in comp}
-    n = mech.value_count
-    slices = mech.value_slices
-    size = float(mech.size())
+    n = pl.nv
+    slices = pl.slices          # by pair index
+    size = float(pl.size)       # mech.size()
     notes = []
 
     q0 = mech.initial_vector()
@@ -304,7 +305,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         cpairs = [k for k, p in enumerate(pairs) if p.link1 in comp_set]
         cloops = [li for li, c in enumerate(loop_comp) if c == ci]
         floating = comp[0] != mech.base
-        dof = sum(pairs[k].value_count for k in cpairs)
+        dof = sum(slices[k].stop - slices[k].start for k in cpairs)
         n_links, n_joints = len(comp), len(cpairs)
         gruebler = 6 * (n_links - (0 if floating else 1) - n_joints) + dof
         c = Component(links=list(comp), root=comp[0], pairs=[names[k] for k in cpairs],
@@ -352,25 +353,28 @@ def _rank_analysis(mech, pl, comp: Component, loop_ids, cpairs, q0, X, T, n, sli
 
     The Jacobian is the solver's loop closure (:func:`solver.loop_twists`; the residual's
     Jacobian is an invertible map of it), each loop's rows turned from its start link's frame
-    into the component root's (``Ad(X_a)``), so that the self-stresses of different loops
-    add up as wrenches in one frame. The closure reported is that of the initial state as
+    into the component root's (``Ad(X_a)``; :func:`solver.root_loop_twists`, each pair
+    evaluated once), so that the self-stresses of different loops add up as wrenches in one
+    frame. The closure reported is that of the initial state as
     forward kinematics places it (``X``, ``T``: :func:`solver.link_poses`): for the chord
     from link a to link b, ``T_chord X_b^-1 X_a``, which is ``T_loop``."""
     pairs = mech.pairs
-    Tl, Jt = _loop_twists(pl, q0[None], loop_ids)
-    blocks, closure = [], 0.0
-    for i, li in enumerate(loop_ids):
+    try:
+        Jt = root_loop_twists(pl, q0, [X[ln] for ln in pl.link_names], loop_ids)
+    except (UnsupportedPairError, ValueError, TypeError) as err:
+        raise UnsupportedPairError(f"loop closure needs the motion of pair(s) without one here ({err})") from err
+    closure = 0.0
+    for li in loop_ids:
         c = pl.loops[li][0][0]
         a, b = pairs[c].link1, pairs[c].link2
-        blocks.append(adjoint(X[a]) @ Jt[0, 6 * i:6 * i + 6])
         T_loop = T[c] @ inverse(X[b]) @ X[a]
         p = T_loop[:3, 3]
         phi = rotation_vector(T_loop[:3, :3])
         closure = max(closure, float(np.linalg.norm(p)) / size, float(np.linalg.norm(phi)))
     loops = [pl.loops[li] for li in loop_ids]
-    cols = np.concatenate([np.arange(n)[slices[pairs[k].name]] for k in cpairs]) if cpairs else \
+    cols = np.concatenate([np.arange(n)[slices[k]] for k in cpairs]) if cpairs else \
         np.zeros(0, dtype=int)
-    J = np.concatenate(blocks, axis=0)[:, cols]
+    J = Jt[:, cols]
     row_scale = np.tile(np.r_[np.full(3, 1.0 / size), np.ones(3)], len(loops))
     Jn = row_scale[:, None] * J * col_scale[cols][None, :]
     # U must span the whole row space (the left null space is wanted); V is not needed in full.

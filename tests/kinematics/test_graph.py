@@ -386,6 +386,28 @@ def test_loop_closure_jacobian_matches_finite_differences(build):
         assert np.allclose(r1, r[idx], atol=1e-14) and np.allclose(J1, J[idx], atol=1e-14)
 
 
+@pytest.mark.parametrize("build", [bennett, slider_crank, spherical_four_bar, lambda: stewart(4), two_components])
+def test_root_loop_twists_are_the_loop_twists_in_the_root_frame(build):
+    """The structure analysis's Jacobian (each pair evaluated once, in its root's frame) is the
+    solver's loop twists turned by Ad(X_a) at an assembled state."""
+    from p105cli.kinematics.solver import link_poses, loop_errors, loop_twists, plan, root_loop_twists
+    from p105cli.kinematics.spatial import adjoint
+
+    mech = build()
+    pl = plan(mech)
+    q = mech.initial_vector()
+    pos, rot = loop_errors(pl, q)
+    assert max(pos[0] / pl.size, rot[0]) < 1e-9          # the builders assemble their mechanisms
+    X, _, _ = link_poses(pl, q)
+    J = root_loop_twists(pl, q, X)
+    _, Jl = loop_twists(pl, q[None])
+    assert J.shape == (6 * len(pl.loops), mech.value_count) and np.abs(J).max() > 0.1
+    for i, lp in enumerate(pl.loops):
+        a = pl.link_index[mech.pairs[lp[0][0]].link1]
+        assert np.allclose(J[6 * i:6 * i + 6], adjoint(X[a]) @ Jl[0, 6 * i:6 * i + 6], atol=1e-8)
+    assert np.array_equal(root_loop_twists(pl, q, X, [len(pl.loops) - 1]), J[-6:])
+
+
 def test_loop_residual_definition():
     """r = (translation, rotation vector) of the walk round the loop from the chord's first link."""
     mech = slider_crank()

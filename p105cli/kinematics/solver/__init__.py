@@ -81,11 +81,12 @@ continuation, branches: :func:`solve_motion`, :func:`iter_motion`),
 from __future__ import annotations
 
 from .assembly import MotionResult, _Loops, iter_motion, solve_motion  # noqa: F401
-from .closure import closure, loop_errors, loop_twists
+from .closure import closure, loop_errors, loop_twists, root_loop_twists
 from .forward import forward, link_poses, pair_transform
 from .inverse import PathResult, _chain, solve_path  # noqa: F401
 from .plan import STATUSES, BranchUndefined, Plan, SolveError, angle_value_mask, plan
 
-__all__ = ["Plan", "plan", "forward", "link_poses", "pair_transform", "closure", "loop_twists", "loop_errors",
+__all__ = ["Plan", "plan", "forward", "link_poses", "pair_transform", "closure", "loop_twists",
+           "root_loop_twists", "loop_errors",
            "MotionResult", "solve_motion", "iter_motion", "PathResult", "solve_path",
            "angle_value_mask", "STATUSES", "SolveError", "BranchUndefined"]

@@ -23,7 +23,7 @@ from ..spatial import adjoint_apply, inverse, quaternion_parts
 from .forward import _E, const_twists, left_twists, pair_transform
 from .plan import Plan
 
-__all__ = ["closure", "loop_twists", "loop_errors"]
+__all__ = ["closure", "loop_twists", "root_loop_twists", "loop_errors"]
 
 
 def _jl_map():
@@ -130,6 +130,36 @@ def loop_twists(pl: Plan, Q, loops=None):
         if S is not None:
             J[:, 6 * i:6 * i + 6, idx] = S
     return Tl, J
+
+
+def root_loop_twists(pl: Plan, q, X, loops=None) -> np.ndarray:
+    """The loops' twist Jacobian for one configuration ``q`` (nv,) in each component root's
+    frame: (6L, nv). ``X``: the link placements at ``q`` in their component root's frame, by
+    link index (:func:`forward.link_poses`). Each pair on a loop is evaluated once, its twist
+    taken at the tree's placement of its second link (``Ad(X_link2 P2) J_body``, crossed
+    backwards its negative), and a loop's rows are the signed sum of its pairs' twists. Where
+    the loops close this is :func:`loop_twists` turned by ``Ad(X_a)`` (``X_a`` the loop's
+    start link); the structure analysis reads rank and self-stresses from it, the
+    self-stresses of different loops adding up as wrenches in one frame."""
+    loops = range(len(pl.loops)) if loops is None else list(loops)
+    q = np.asarray(q, dtype=np.float64)
+    on_loop = sorted({k for li in loops for k, _ in pl.loops[li]})
+    cols, F, Jb = [], [], []
+    for k in on_loop:
+        sl = pl.slices[k]
+        Jb.append(pl.types[k].motion_jacobian(q[sl], **pl.params[k]))
+        cols.extend(range(sl.start, sl.stop))
+        F.extend([X[pl.link_index[pl.mech.pairs[k].link2]] @ pl.P2[k]] * (sl.stop - sl.start))
+    S = np.zeros((6, pl.nv))
+    if cols:
+        # Ad(X_link2 P2) J_body per value column, all columns at once
+        S[:, cols] = adjoint_apply(np.asarray(F), np.concatenate(Jb, axis=-1).T[:, :, None])[:, :, 0].T
+    J = np.zeros((6 * len(loops), pl.nv))
+    for i, li in enumerate(loops):
+        for k, fwd in pl.loops[li]:
+            sl = pl.slices[k]
+            J[6 * i:6 * i + 6, sl] = S[:, sl] if fwd else -S[:, sl]
+    return J
 
 
 def _revolute_loop(pl: Plan, li: int):
