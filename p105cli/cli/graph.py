@@ -87,7 +87,7 @@ def _the_one(doc, mechs):
 
 def _enrich(doc, mechs, profile, to, input, output, tol):
     from p105cli.kinematics.graph import analyse
-    from p105cli.kinematics.graph_entities import EnrichError, enrich
+    from p105cli.part105.topology import EnrichError, enrich
     from ._emit import emit_json, emit_p21
 
     fmt = to or ("p21" if hasattr(doc, "text") else "json")

@@ -166,7 +166,7 @@ class Pair:
 
     def transform(self, q) -> np.ndarray:
         """``T_link1_link2(q) = P1 @ M(q) @ inv(P2)``, batched."""
-        from .placements import inverse
+        from .spatial import inverse
 
         return self.P1 @ self.motion(q) @ inverse(self.P2)
 

@@ -415,6 +415,7 @@ class ModelFile:
         import numpy as np
 
         from ..kinematics import placements as pl
+        from ..kinematics import spatial
 
         axes = {a: self.direction(i, a) for a in ("axis1", "axis2", "axis3")}
         raw_scale = self.get(i, "scale", None)
@@ -430,12 +431,12 @@ class ModelFile:
                                   "is not a rigid placement")
         loc = self.ref(i, "local_origin", types=("cartesian_point",))
         xyz = self.vector(loc, "coordinates")
-        return pl.transform(R, [c * scale.length for c in xyz])
+        return spatial.transform(R, [c * scale.length for c in xyz])
 
     def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> "np.ndarray":
         """``T_rep2_rep1`` of an item_defined_transformation: ``T(item_2) @ inv(T(item_1))``."""
-        from ..kinematics import placements as pl
+        from ..kinematics import spatial
 
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
-        return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))
+        return self.placement(b, scale2) @ spatial.inverse(self.placement(a, scale1))

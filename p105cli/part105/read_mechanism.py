@@ -86,6 +86,7 @@ from typing import Optional
 import numpy as np
 
 from ..kinematics import placements as pl
+from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
@@ -292,7 +293,7 @@ class _Reader:
             ids[key] = g
             holder_rep, T_link_geom = self._geometry_placement(g, reps[which - 1], frames[which - 1])
             s = d.scale(holder_rep)
-            T_pair_geom = pl.inverse(frames[which - 1]) @ T_link_geom
+            T_pair_geom = spatial.inverse(frames[which - 1]) @ T_link_geom
             fn = gs.surface_from_instance if "surface" in key else gs.curve_from_instance
             try:
                 obj = fn(d.pop, d.pop.instance(g), s.length, s.angle)

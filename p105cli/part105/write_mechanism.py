@@ -66,7 +66,7 @@ import math
 
 import numpy as np
 
-from p105cli.kinematics.placements import compose
+from p105cli.kinematics.spatial import compose
 from p105cli.step.values import ref_id
 
 from .catalogue import APPLICATION, PROFILES

@@ -36,7 +36,7 @@ def test_a_prescribed_path_is_poses_of_a_link_frame():
 def test_no_program_is_an_error_naming_the_file():
     from p105cli.formats.dh_table import read_csv
     from p105cli.kinematics import dh
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
 
     table = read_csv((ROOT / "examples" / "puma560_dh.csv").read_text(), "standard")
     doc, _ = write_mechanism(dh.to_mechanism(table, "ap242"), "ap242")   # a mechanism, no program
