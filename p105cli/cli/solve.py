@@ -97,13 +97,14 @@ def solve(**options):
     o.scene_dict = _load_scene(o.scene) if o.scene is not None else None
     if o.model is None:
         return _scene_only(o)
-    doc, mech = _read_model(o.model, o.schema, o.mechanism)
+    model, mech = _read_model(o.model, o.schema, o.mechanism)
+    doc = model.doc
     if o.scene_dict is None and getattr(doc, "scene", None) is not None:
         o.to, o.scene_dict, o.scene = _model_scene(doc, o.model, o.to, o.to_given)
-    prog = _program(doc, mech, o.schema, o.count, o.step) if o.program else None
+    prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
-    if _output(o, doc, mech, pl, motion, blocks, requests):
+    if _output(o, model, mech, pl, motion, blocks, requests):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
 
@@ -132,7 +133,7 @@ def _scene_only(o):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
 
-def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
+def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
     """Every block written (and the scene run on the motion); the warnings. True on findings."""
     from p105cli.formats.solve_records import Table, Tally, write_blocks
     tally = Tally(motion.inverse)
@@ -140,7 +141,7 @@ def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
     with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
         if o.to == "model":
             def write(result, links, t, offset):
-                _write_model(out, mech, result, doc, t, requests)
+                _write_model(out, model, mech, result, t, requests)
         else:
             table = Table(out, o.to, mech, pl, inverse=motion.inverse, length=o.lf, angle=o.af)
             table.header()
@@ -201,11 +202,15 @@ def _check_branch(branch, model, scene, path):
 
 
 def _read_model(model, schema, mechanism):
+    """``(ModelFile, Mechanism)``: the command's one model file (one population: the program,
+    the results and the mechanism are read from it)."""
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.read_mechanism import read_mechanism
     doc = load_document(model)
     report_warnings(doc)
     with naming_source(doc):
-        return doc, read_mechanism(doc, schema, mechanism)
+        mf = ModelFile.of(doc, schema)
+        return mf, read_mechanism(mf, name=mechanism)
 
 
 def _model_scene(doc, model, to, to_given):
@@ -219,12 +224,12 @@ def _model_scene(doc, model, to, to_given):
     return to, None, None
 
 
-def _program(doc, mech, schema, count, step):
+def _program(model, mech, count, step):
     from p105cli.part105.program import ProgramError, motion_program
-    source = source_of(doc)
+    source = source_of(model.doc)
     try:
-        with naming_source(doc):
-            return motion_program(doc, mech, schema, count, step, source, note=lambda m: diag("note", m))
+        with naming_source(model.doc):
+            return motion_program(model, mech, count, step, source, note=lambda m: diag("note", m))
     except ProgramError as err:
         raise InputError(str(err)) from None
 
@@ -289,35 +294,27 @@ def _target_frame(mech, link_name, frame_name):
 
 
 def _resulting_paths(mech, pl, specs, motion):
-    """The link frames whose resulting paths go into the model: --resulting-path, else the
-    target of an inverse analysis."""
-    from p105cli.part105.results import ResultingPathError, resulting_path_request
+    from p105cli.part105.results import ResultingPathError, resulting_path_requests
     try:
-        if specs:
-            return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
-        if motion.inverse:
-            spec = motion.link if motion.frame_name is None or motion.frame is None \
-                else f"{motion.link}:{motion.frame_name}"
-            return [resulting_path_request(mech, pl, spec, frame_matrix=motion.frame)]
+        return resulting_path_requests(mech, pl, specs, motion)
     except ResultingPathError as err:
         raise InputError(str(err)) from None
-    return []
 
 
-def _write_model(out, mech, result, doc, t, paths=()):
+def _write_model(out, model, mech, result, t, paths=()):
     """The input model plus the analysis results, in the input's format (Part 21 or JSON)."""
-    from p105cli.part105.results import add_results
+    from p105cli.part105.results import model_with_results
     from ._emit import emit_json, emit_p21
     try:
-        new, notes = add_results(doc, mech, result.Q, t, result.status, paths=paths, pl=result.plan)
+        new, notes = model_with_results(model, mech, result, t, paths)
     except ValueError as err:
-        raise InputError(f"{doc.source}: {err}") from None
-    if hasattr(doc, "text"):
+        raise InputError(f"{model.doc.source}: {err}") from None
+    if hasattr(model.doc, "text"):
         emit_p21(new, out)
     else:
         emit_json(new, out, False)
     for note in notes:
-        diag("note", f"{doc.source}: {note}")
+        diag("note", f"{model.doc.source}: {note}")
 
 
 def _load_scene(path):
