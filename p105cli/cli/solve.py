@@ -15,8 +15,9 @@ import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings, stderr_is_terminal
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
-from .options import SCHEMA_HELP_SHORT, angle_unit_option, check_tol, count_option, input_schema, \
+from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
+from .solve_rules import check_usage
 
 FORMATS = ["model", "jsonl", "csv"]
 
@@ -90,7 +91,7 @@ def solve(**options):
     o = SimpleNamespace(**options)
     o.to_given = o.to is not None
     o.to = o.to or ("jsonl" if o.scene is not None else "model")
-    o.want = _check(o)
+    o.want = check_usage(o)
     from p105cli.formats.values import ANGLE_UNITS, LENGTH_UNITS
     o.lf, o.af = LENGTH_UNITS[o.length_unit], ANGLE_UNITS[o.angle_unit]
     o.pictures = (o.plot, o.animation)
@@ -106,21 +107,6 @@ def solve(**options):
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
     if _output(o, model, mech, pl, motion, blocks, requests):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
-
-
-def _check(o):
-    """The usage errors of the command line, in order; the requested branch invariant."""
-    _check_outputs(o.model, o.scene, o.to, o.plot, o.animation, o.resulting_paths)
-    check_tol(o.tol)
-    _check_motion(o.values, o.sets, o.sweeps, o.path, o.target_link, o.program)
-    _check_sampling(o.program, o.count, o.step)
-    want = _check_branch(o.branch, o.model, o.scene, o.path)
-    if o.model is None and o.scene is None:
-        o.model = "-"
-    stdin_users = [n for n, v in (("MODEL", o.model), ("--values", o.values), ("--path", o.path)) if v == "-"]
-    if len(stdin_users) > 1:
-        raise click.UsageError(f"only one of {' and '.join(stdin_users)} can read standard input")
-    return want
 
 
 def _scene_only(o):
@@ -155,50 +141,6 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
     return tally.failed
-
-
-def _check_outputs(model, scene, to, plot, animation, resulting_paths):
-    if scene is not None and to != "jsonl":
-        raise click.UsageError("--scene writes JSON Lines (--to jsonl)")
-    for name, target in (("--plot", plot), ("--animate", animation)):
-        if target is not None and model is None and scene is None:
-            raise click.UsageError(f"{name} draws a scene's cables: it needs --scene (or a model with a scene)")
-    if resulting_paths and to != "model":
-        # the tables carry every link's placement already; the path entities are model output
-        diag("note", f"--resulting-path is written with --to model only; the {to} output has the link placements")
-
-
-def _check_motion(values, sets, sweeps, path, target_link, program):
-    """Which ways of giving a motion go together."""
-    forward = values is not None or bool(sets) or bool(sweeps)
-    if path is not None and target_link is None:
-        raise click.UsageError("--path needs --target-link")
-    if path is not None and forward:
-        raise click.UsageError("--path (inverse analysis) cannot be combined with --values, --set or --sweep")
-    if sweeps and values is not None:
-        raise click.UsageError("--sweep and --values cannot be combined")
-    if program and (forward or path is not None):
-        raise click.UsageError("--program runs the model's own motion: it cannot be combined with --values, "
-                               "--set, --sweep or --path")
-
-
-def _check_sampling(program, count, step):
-    import math
-    if (count is not None or step is not None) and not program:
-        raise click.UsageError("--count and --step sample a motion program: they need --program")
-    if count is not None and step is not None:
-        raise click.UsageError("give at most one of --count and --step")
-    if step is not None and not (step > 0.0 and math.isfinite(step)):
-        raise click.UsageError("--step must be a positive number")
-
-
-def _check_branch(branch, model, scene, path):
-    """The requested branch invariant (None: the initial state's)."""
-    want = {"initial": None, "+": 1, "-": -1}[branch]
-    if want is not None and (path is not None or (model is None and scene is not None)):
-        raise click.UsageError(f"--branch {branch}: the assembly branch is chosen in forward analysis of a model "
-                               "with closed loops" + (" (not with --path)" if path is not None else ""))
-    return want
 
 
 def _read_model(model, schema, mechanism):
