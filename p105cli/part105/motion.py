@@ -85,10 +85,10 @@ def _placement(pop, pid: Optional[int], length: float) -> np.ndarray:
     return placement_from_instance(pop, pop.instance(pid), length)
 
 
-def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult:
+def read_paths(doc, profile: str | None = None) -> MotionReadResult:
     """Every kinematic path of the model, SI units. ``doc``: a document, Population or
-    ModelFile (``pop``: the Population already built for ``doc``)."""
-    mf = ModelFile.of(pop if pop is not None else doc, profile)
+    ModelFile (the command's one: no population is built then)."""
+    mf = ModelFile.of(doc, profile)
     pop = mf.pop
     out = MotionReadResult()
     ents = pop.schema.entities
@@ -183,7 +183,7 @@ def _interpolation(inst) -> str:
     return _INTERPOLATION[name]
 
 
-def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
+def read_configuration_sequences(doc, profile: str | None = None):
     """``(sequences, kinds, skipped)``: every interpolated_configuration_sequence as a
     :class:`ConfigurationSequence` (pair values in SI, keyed by pair name as the
     mechanism reader names them), the pair kinds by name, and ``(#id, message)``
@@ -191,7 +191,7 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
     from ..motion.configurations import ConfigurationNode, ConfigurationSequence
     from .read_mechanism import PairValueReader
 
-    mf = ModelFile.of(pop if pop is not None else doc, profile)
+    mf = ModelFile.of(doc, profile)
     pop = mf.pop
     seq_ids = pop.ids_of_type("interpolated_configuration_sequence") \
         if "interpolated_configuration_sequence" in pop.schema.entities else []

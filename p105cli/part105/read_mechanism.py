@@ -96,10 +96,10 @@ from . import geometry
 from . import layout as lay
 from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
     range_on_values
-from .model_file import ContextScale, ModelFile, model_error, open_population
+from .model_file import ContextScale, ModelFile, model_error
 from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
-__all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "population", "choose_mechanism"]
+__all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "choose_mechanism"]
 
 _GEOMETRY_ATTRS = GEOMETRY_ATTRIBUTES
 
@@ -406,13 +406,6 @@ class _Reader:
 
 
 # --------------------------------------------------------------------------- entry points
-
-def population(doc, profile: str | None = None):
-    """``(Population, profile name)`` for ``doc``: FILE_SCHEMA's profile unless
-    ``profile`` is given, a 1996-layout AP214 file holding su_parameters read as
-    ``p105`` (:func:`p105cli.part105.model_file.open_population`)."""
-    return open_population(doc, profile)
-
 
 def read_mechanisms(doc, profile: str | None = None) -> list:
     """Every mechanism of ``doc`` as a :class:`~p105cli.kinematics.model.Mechanism`, in file order.
