@@ -18,6 +18,7 @@ from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, so
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
 from .solve_rules import check_usage
+from .solve_scene import load_scene, model_scene, run_scene, scene_only
 
 FORMATS = ["model", "jsonl", "csv"]
 
@@ -95,27 +96,17 @@ def solve(**options):
     from p105cli.formats.values import ANGLE_UNITS, LENGTH_UNITS
     o.lf, o.af = LENGTH_UNITS[o.length_unit], ANGLE_UNITS[o.angle_unit]
     o.pictures = (o.plot, o.animation)
-    o.scene_dict = _load_scene(o.scene) if o.scene is not None else None
+    o.scene_dict = load_scene(o.scene) if o.scene is not None else None
     if o.model is None:
-        return _scene_only(o)
+        return scene_only(o)
     model, mech = _read_model(o.model, o.schema, o.mechanism)
     doc = model.doc
     if o.scene_dict is None and getattr(doc, "scene", None) is not None:
-        o.to, o.scene_dict, o.scene = _model_scene(doc, o.model, o.to, o.to_given)
+        o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
     prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
     if _output(o, model, mech, pl, motion, blocks, requests):
-        raise click.exceptions.Exit(ExitCode.FINDINGS)
-
-
-def _scene_only(o):
-    """A scene without a model: its cables between fixed ends or along key points."""
-    if o.values is not None or o.sets or o.sweeps or o.path is not None:
-        raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
-    with open_output(o.output, (o.scene, o.keypoints)) as out:
-        ok = _run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures)
-    if not ok:
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
 
@@ -135,7 +126,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
         write_blocks(blocks, motion.t, write, tally, mech.link_names, placements)
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
-            if o.scene_dict is not None and not _run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
+            if o.scene_dict is not None and not run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
                                                            o.pictures):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
@@ -153,17 +144,6 @@ def _read_model(model, schema, mechanism):
     with naming_source(doc):
         mf = ModelFile.of(doc, schema)
         return mf, read_mechanism(mf, name=mechanism)
-
-
-def _model_scene(doc, model, to, to_given):
-    """The model carries its scene (a JSON model's "scene" block): run it as --scene would.
-    Returns the output format, the scene and its name."""
-    if not to_given:
-        to = "jsonl"
-    if to == "jsonl":
-        return to, doc.scene, model if not is_stdin(model) else "."
-    diag("note", f"{doc.source}: the model's scene is run with --to jsonl only")
-    return to, None, None
 
 
 def _program(model, mech, count, step):
@@ -257,20 +237,3 @@ def _write_model(out, model, mech, result, t, paths=()):
         emit_json(new, out, False)
     for note in notes:
         diag("note", f"{model.doc.source}: {note}")
-
-
-def _load_scene(path):
-    from p105cli.cable.run import SceneInputError, load_scene
-    try:
-        return load_scene(path)
-    except SceneInputError as err:
-        raise InputError(str(err)) from None
-
-
-def _run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None)) -> bool:
-    """The scene's effects on the motion as JSON Lines records; False on findings."""
-    from p105cli.cable import run
-    try:
-        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m))
-    except run.SceneInputError as err:
-        raise InputError(str(err)) from None
