@@ -299,7 +299,7 @@ def plot(rows, path):
 
 def _heavy_3d(t=0.0):
     """3D heavy cable with torsion, anisotropic, both ends clamped, end frame twisted and moving
-    (the case of tests/test_cable_rod.py); L = 1, weight 1 per unit length."""
+    (the case of tests/cable/test_rod.py); L = 1, weight 1 per unit length."""
     from p105cli.kinematics.spatial import rot_y, rot_z, transform
 
     Ts = transform(rot_y(np.pi / 2)[:3, :3], [0.0, 0.0, 0.0])

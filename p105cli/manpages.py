@@ -10,7 +10,7 @@ table in ``contract.EXIT_STATUS_TEXT``. The only hand-written text is in
 ``PAGES`` below: per-command input/output specifics and examples.
 
 The output is deterministic (no dates, sorted options), so the committed pages
-change only when the CLI does; tests/test_manpages.py checks that.
+change only when the CLI does; tests/cli/test_manpages.py checks that.
 """
 
 from __future__ import annotations

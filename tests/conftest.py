@@ -75,6 +75,29 @@ def p105(capfdbinary, monkeypatch):
     return run
 
 
+def cli_in_process(*args, input: bytes | str | None = None, env: dict | None = None):
+    """``p105 ARGS`` run in this process, with the shape of :func:`run_cli`'s result
+    (returncode, stdout and stderr as bytes), from the repository root. What a process
+    adds (pipes, signals, start-up, time limits) is run_cli's job; everything else is
+    tested here, without paying an interpreter and a schema load per call."""
+    from make_golden import run_in_process
+
+    if isinstance(input, str):
+        input = input.encode("utf-8")
+    saved = {k: os.environ.get(k) for k in (*(env or {}), "CI")}
+    os.environ.pop("CI", None)
+    os.environ.update(env or {})
+    try:
+        code, out, err = run_in_process([str(a) for a in args], input or b"")
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return subprocess.CompletedProcess(["p105", *map(str, args)], code, out, err.encode("utf-8"))
+
+
 def same_value(a, b) -> bool:
     """Equality that also requires the same types and the same sign of zero."""
     if type(a) is not type(b):

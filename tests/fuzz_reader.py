@@ -176,7 +176,7 @@ def run_hypothesis() -> int:
 
     from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
-    from test_roundtrip_props import part21_file
+    from step.test_roundtrip_props import part21_file
 
     seed_list = seeds()
     words = [w.encode() for w in DICTIONARY]

@@ -9,7 +9,7 @@ Regenerate (after a change of output that is meant; review ``git diff`` of the d
 
 Each case is one ``p105`` command run in-process (``p105cli.cli.main``) from the
 repository root with relative paths, stdin given or empty, stdout and stderr captured;
-``tests/test_golden_cli.py`` runs the cases again and compares. A case's golden file
+``tests/exchange/test_golden_cli.py`` runs the cases again and compares. A case's golden file
 ``tests/data/golden_cli/<id>.json`` (``.json.gz`` when large) holds its arguments,
 stdin, exit status, stderr and stdout. ``stdin`` is ``null`` (empty), ``"@<id>"``: the
 golden stdout of another case (a pipeline, each stage checked on its own), or ``"<path"``:

@@ -18,7 +18,7 @@ from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.placements import ypr_from_matrix, ypr_rotation
 from p105cli.kinematics.spatial import compose, rot_x, rot_y, rot_z, trans_x, trans_y, transform
-from test_solve import _dh_product, dh_mechanism, four_bar, link_angles, ref, wrap  # noqa: F401 - ref is a fixture
+from kinematics.test_solver import _dh_product, dh_mechanism, four_bar, link_angles, ref, wrap  # noqa: F401 - ref is a fixture
 
 I4 = np.eye(4)
 

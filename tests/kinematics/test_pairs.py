@@ -334,7 +334,7 @@ def test_registry_names():
 def test_registry_names_are_schema_entities():
     import re
     from pathlib import Path
-    schemas = Path(__file__).resolve().parents[2] / "shared" / "schema"
+    schemas = Path(__file__).resolve().parents[3] / "shared" / "schema"
     if not schemas.is_dir():
         schemas = Path("/work/shared/schema")
     if not schemas.is_dir():

@@ -23,7 +23,7 @@ from p105cli.step import read_step
 from p105cli.step.errors import ModelError
 
 RNG = np.random.default_rng(42)
-DATA = Path(__file__).resolve().parent / "data" / "corpus"
+DATA = Path(__file__).resolve().parents[1] / "data" / "corpus"
 
 
 def _T():

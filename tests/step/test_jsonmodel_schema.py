@@ -8,7 +8,7 @@ from importlib import resources
 import jsonschema
 import pytest
 
-from conftest import corpus_files, p21, run_cli
+from conftest import cli_in_process, corpus_files, p21
 
 SCHEMA = json.loads(resources.files("p105cli").joinpath("schemas/p105-1.schema.json").read_text())
 VALIDATOR = jsonschema.Draft202012Validator(SCHEMA)
@@ -21,13 +21,13 @@ def test_schema_is_a_valid_draft_2020_12_schema():
 
 @pytest.mark.parametrize("path", SMALL, ids=[p.name for p in SMALL])
 def test_document_output_conforms(path):
-    r = run_cli("parse", path)
+    r = cli_in_process("parse", path)
     VALIDATOR.validate(json.loads(r.stdout))
 
 
 @pytest.mark.parametrize("path", SMALL, ids=[p.name for p in SMALL])
 def test_stream_output_conforms(path):
-    lines = run_cli("parse", "--stream", path).stdout.decode().splitlines()
+    lines = cli_in_process("parse", "--stream", path).stdout.decode().splitlines()
     frame_validator = jsonschema.Draft202012Validator(
         {**SCHEMA["$defs"]["stream_frame"], "$defs": SCHEMA["$defs"]})
     record_validator = jsonschema.Draft202012Validator(
@@ -43,7 +43,7 @@ def test_every_value_kind_conforms():
               "FILE_SCHEMA(('S'));FILE_POPULATION('S',$,$);ENDSEC;ANCHOR;<a>=#1;ENDSEC;DATA('d',('S'));")
     text2 = header + "#1=A();ENDSEC;DATA;#2=B(#1);ENDSEC;END-ISO-10303-21;"
     for t in (text, text2):
-        r = run_cli("parse", input=t)
+        r = cli_in_process("parse", input=t)
         assert r.returncode == 0, r.stderr
         VALIDATOR.validate(json.loads(r.stdout))
 
@@ -60,7 +60,7 @@ def test_every_value_kind_conforms():
     ('{"format":"p105/1","header":{},"data":[', "1:"),
 ])
 def test_malformed_models_are_exit_2_with_a_pointer(bad, where):
-    r = run_cli("export", input=bad)
+    r = cli_in_process("export", input=bad)
     assert r.returncode == 2, r.stderr
     err = r.stderr.decode()
     assert err.startswith("p105: error: <stdin>:") and where in err and "Traceback" not in err

@@ -15,7 +15,7 @@ from p105cli import manpages
 from p105cli.cli import cli
 from p105cli.cli.contract import ExitCode
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 MAN = ROOT / "man"
 
 REQUIRED_SECTIONS = ("NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "EXIT STATUS",

@@ -21,15 +21,17 @@ import time
 
 import pytest
 
-from conftest import (LOCATED, clean_error, clean_exit, line_col_of, p21, read_all, run_cli,
+from conftest import (LOCATED, clean_error, clean_exit, cli_in_process, line_col_of, p21, read_all, run_cli,
                       same_records, same_value)
 
 from p105cli.step import StepError, decode_bytes, read_json, read_step, write_json, write_step
 
 
 def parse(text, *args, **kw):
-    """``p105 parse`` of a Part 21 (or JSON) text given on stdin."""
-    return run_cli("parse", *args, "-", input=text, **kw)
+    """``p105 parse`` of a Part 21 (or JSON) text given on stdin: in this process, or in a
+    process of its own when the test sets a time limit (a hang must fail, not stall)."""
+    run = run_cli if "timeout" in kw else cli_in_process
+    return run("parse", *args, "-", input=text, **kw)
 
 
 def parsed_records(proc) -> list:
@@ -74,7 +76,7 @@ def test_deepest_allowed_nesting_round_trips():
     # The limit counts the argument list itself: 199 more levels are allowed.
     text = p21("#1=A(" + "(" * 199 + "1" + ")" * 199 + ");\n#2=B(" + "X(" * 199 + "2" + ")" * 199 + ");")
     records = parsed_records(parse(text))
-    proc = run_cli("export", "--to", "p21", "-", input=json.dumps({"format": "p105/1", "header": {},
+    proc = cli_in_process("export", "--to", "p21", "-", input=json.dumps({"format": "p105/1", "header": {},
                                                                      "data": records}))
     clean_exit(proc, 0)
     assert same_records(parsed_records(parse(proc.stdout)), records)
@@ -171,10 +173,10 @@ def test_reference_cycles_are_fine_and_round_trip():
     assert "warning" not in err
     records = json.loads(proc.stdout)["data"]
     assert records[0] == {"id": 1, "type": "a", "args": [{"ref": 2}]}
-    back = run_cli("export", "--to", "p21", "-", input=proc.stdout)
+    back = cli_in_process("export", "--to", "p21", "-", input=proc.stdout)
     clean_exit(back, 0)
     assert same_records(parsed_records(parse(back.stdout)), records)
-    again = run_cli("export", "--to", "p21", "-", input=back.stdout)
+    again = cli_in_process("export", "--to", "p21", "-", input=back.stdout)
     assert again.stdout == back.stdout
 
 
@@ -192,7 +194,7 @@ def test_dangling_references_warn_naming_the_instance():
 
 def test_dangling_references_from_json_warn_too():
     doc = {"format": "p105/1", "header": {}, "data": [{"id": 5, "type": "a", "args": [{"ref": 6}]}]}
-    err = clean_exit(run_cli("export", "--to", "p21", "-", input=json.dumps(doc)), 0)
+    err = clean_exit(cli_in_process("export", "--to", "p21", "-", input=json.dumps(doc)), 0)
     assert "#5: reference to #6" in err
 
 
@@ -297,7 +299,7 @@ def test_duplicate_instance_ids_name_the_id():
 def test_duplicate_ids_in_json_name_the_id():
     doc = {"format": "p105/1", "header": {},
            "data": [{"id": 3, "type": "a", "args": []}, {"id": 3, "type": "b", "args": []}]}
-    error_line(run_cli("export", "-", input=json.dumps(doc)), "#3", "/data/1")
+    error_line(cli_in_process("export", "-", input=json.dumps(doc)), "#3", "/data/1")
 
 
 # ---------------------------------------------------------------- binary garbage
@@ -363,7 +365,7 @@ def test_reals_keep_their_exact_values():
     expected = [-0.0, 0.0, 1e-320, 5e-324, 0.0, 1.7976931348623157e308, -2.2250738585072014e-308,
                 0.1, 1e16, 1.2345678901234568e29, 1.0]
     assert same_value(args, expected)
-    back = run_cli("export", "--to", "p21", "-", input=proc.stdout)
+    back = cli_in_process("export", "--to", "p21", "-", input=proc.stdout)
     clean_exit(back, 0)
     assert "#1=A(-0.,0.,1.E-320,5.E-324,0.,1.7976931348623157E308,-2.2250738585072014E-308," \
            "0.1,1.E16,1.2345678901234568E29,1.);" in back.stdout.decode()
@@ -376,7 +378,7 @@ def test_big_integers_round_trip_and_too_long_ones_are_errors():
     proc = parse(text)
     args = parsed_records(proc)[0]["args"]
     assert args == [big, -big, 0, 5, 7, {"ref": 1}]
-    back = run_cli("export", "--to", "p21", "-", input=proc.stdout)
+    back = cli_in_process("export", "--to", "p21", "-", input=proc.stdout)
     clean_exit(back, 0)
     assert parsed_records(parse(back.stdout))[0]["args"] == args
     # Longer than the interpreter converts (quadratic time): an error at the number.
@@ -424,7 +426,7 @@ def test_every_escape_decodes_and_round_trips():
     records = json.loads(proc.stdout)["data"]
     for record, (lit, value) in zip(records, STRINGS):
         assert record["args"] == [value], lit
-    back = run_cli("export", "--to", "p21", "-", input=proc.stdout)
+    back = cli_in_process("export", "--to", "p21", "-", input=proc.stdout)
     clean_exit(back, 0)
     assert back.stdout.isascii()
     assert parsed_records(parse(back.stdout)) == records
@@ -531,7 +533,7 @@ def test_malformed_values_are_errors(body, message):
 def export(doc: str | bytes | dict, to: str = "p21"):
     if isinstance(doc, dict):
         doc = json.dumps(doc)
-    return run_cli("export", "--to", to, "-", input=doc)
+    return cli_in_process("export", "--to", to, "-", input=doc)
 
 
 def frame(**kw) -> dict:

@@ -729,7 +729,7 @@ def test_where_unique_and_global_rules(ev, tpop):
 KINEMATICS_NAMES = SHARED / "schema" / "kinematics_entity_names_union.txt"
 PROBES = sorted((CORPUS / "authored").glob("*.stp")) + sorted(EXAMPLES.glob("*.stp"))
 # the project's generated corpus (<mechanism>_<profile>.stp), when present
-GENERATED = sorted((Path(__file__).parent / "data" / "corpus").glob("*.stp"))
+GENERATED = sorted((Path(__file__).resolve().parents[1] / "data" / "corpus").glob("*.stp"))
 P105_1996 = CORPUS / "authored" / "probe_p105_1996_ap214.stp"
 STAR = CORPUS / "authored" / "probe_standard_star.stp"
 AP242_NAME = "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF"

@@ -1,7 +1,7 @@
 """The diagnostics model of ``p105 validate`` and every report format.
 
 Golden files: ``tests/data/golden/report.<ext>``; regenerate them with
-``P105_UPDATE_GOLDEN=1 python3 -m pytest tests/test_report.py`` and review the diff by eye.
+``P105_UPDATE_GOLDEN=1 python3 -m pytest tests/rules/test_report.py`` and review the diff by eye.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from p105cli.rules.diagnostics import (NOT_EVALUATED, Diagnostic, RunResult, Sev
 from p105cli.rules.report import (FORMATS, SARIF_FINGERPRINT_KEY, describe, entity_suffix,
                                   format_line, resolve_format, write_report)
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 GOLDEN = DATA / "golden"
 SCHEMAS = DATA / "schemas"
 UPDATE = os.environ.get("P105_UPDATE_GOLDEN") == "1"
@@ -614,5 +614,5 @@ def test_rules_package_does_not_import_click():
     code = ("import sys, p105cli.rules, p105cli.rules.report; "
             "print('click' in sys.modules, 'rich' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=Path(__file__).resolve().parent.parent, check=True).stdout
+                         cwd=Path(__file__).resolve().parents[2], check=True).stdout
     assert out.split() == ["False", "False"]

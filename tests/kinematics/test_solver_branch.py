@@ -14,10 +14,10 @@ import math
 import numpy as np
 import pytest
 
-import test_solve
+import kinematics.test_solver as test_solve
 from conftest import ROOT
-from test_solve import REFERENCE, _records, _reference_four_bar, four_bar, link_angles, wrap
-from test_solve_hard import four_bar_closed_form, offset_slider_crank, sigma_of
+from kinematics.test_solver import REFERENCE, _records, _reference_four_bar, four_bar, link_angles, wrap
+from kinematics.test_solver_hard import four_bar_closed_form, offset_slider_crank, sigma_of
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.spatial import compose, rot_x, rot_y, rot_z

@@ -26,7 +26,7 @@ from p105cli.kinematics.spatial import inverse
 from p105cli.part105.read_mechanism import read_mechanism, read_mechanisms
 from p105cli.step import DataSection, JsonDocument, ModelError, read_step
 
-CORPUS_DIR = Path(__file__).resolve().parent / "data" / "corpus"
+CORPUS_DIR = Path(__file__).resolve().parents[1] / "data" / "corpus"
 PROFILES = ("ap214", "p105", "ap242")
 MM = 1e-3
 FRAME_TOL = 1e-12  # metres / matrix entries

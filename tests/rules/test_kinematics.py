@@ -25,7 +25,7 @@ from p105cli.schema.evaluator import Evaluator
 from p105cli.schema.population import Population
 from p105cli.step import read_step
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = Path(os.environ.get("P105_SHARED", ROOT.parent / "shared"))
 CORPUS_DIR = ROOT / "tests" / "data" / "corpus"
 BIG_DIR = SHARED / "corpus" / "big"

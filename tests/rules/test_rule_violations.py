@@ -41,7 +41,7 @@ from p105cli.schema.population import Population
 from p105cli.schema.profiles import profile_for_header
 from p105cli.step import read_step
 
-CORPUS = Path(__file__).resolve().parent / "data" / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "data" / "corpus"
 PROFILES = ("ap214", "ap242", "p105")
 SCHEMA_ARG = {"ap214": None, "ap242": None, "p105": "p105"}
 

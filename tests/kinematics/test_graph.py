@@ -451,7 +451,7 @@ def test_tolerance_is_relative_and_validated():
 
 # --------------------------------------------------------------------------- the corpus
 
-CORPUS_DIR = __import__("pathlib").Path(__file__).resolve().parent / "data" / "corpus"
+CORPUS_DIR = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "corpus"
 # (Gruebler-Kutzbach by hand, known mobility).
 CORPUS_TRUTH = {
     "cam_follower": (6 * (3 - 1 - 3) + (1 + 1 + 4), 1),     # point on planar curve: 4 freedoms

@@ -18,7 +18,7 @@ from p105cli.schema import (
 from p105cli.schema import model as M
 from p105cli.schema.express import strip_comments, tokenize
 
-SCHEMA_DIR = Path(os.environ.get("P105_SHARED", Path(__file__).resolve().parent.parent.parent
+SCHEMA_DIR = Path(os.environ.get("P105_SHARED", Path(__file__).resolve().parents[3]
                                   / "shared")) / "schema"
 AP214 = SCHEMA_DIR / "AP214E3_2010_automotive_design_longform.exp"
 AP242 = SCHEMA_DIR / "AP242_N10962_mim_lf.exp"
@@ -766,7 +766,7 @@ def test_no_click_or_numpy_import():
     code = ("import sys, p105cli.schema as s; "
             "print(any(m in sys.modules for m in ('click', 'numpy')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=Path(__file__).resolve().parent.parent)
+                         cwd=Path(__file__).resolve().parents[2])
     assert out.stdout.strip() == "False", out.stderr
 
 

@@ -118,7 +118,7 @@ def test_standard_output_is_what_occt_misreads(tmp_path):
 @pytest.mark.parametrize("which", ["low", "higher"])
 def test_every_pair_kind_loads_in_occt(tmp_path, which):
     """Self-contained files (source=None) with one pair of every kind p105 writes."""
-    from test_model_writer import _hand_built, _higher, text_of
+    from part105.test_write_mechanism import _hand_built, _higher, text_of
 
     from p105cli.kinematics.model import Units
 
