@@ -41,7 +41,7 @@ from p105cli.cable.helix import helix_frames  # noqa: E402
 from p105cli.cable.patent import solve_patent  # noqa: E402
 from p105cli.cable.rod import RodProblem, solve_rod  # noqa: E402
 from p105cli.fileio import atomic_file, write_text_atomically  # noqa: E402
-from p105cli.kinematics.placements import matrix_to_quaternion  # noqa: E402
+from p105cli.kinematics.spatial import matrix_to_quaternion  # noqa: E402
 
 NS = (10, 20, 50, 100, 200)
 
@@ -300,7 +300,7 @@ def plot(rows, path):
 def _heavy_3d(t=0.0):
     """3D heavy cable with torsion, anisotropic, both ends clamped, end frame twisted and moving
     (the case of tests/cable/test_rod.py); L = 1, weight 1 per unit length."""
-    from p105cli.kinematics.placements import rot_y, rot_z, transform
+    from p105cli.kinematics.spatial import rot_y, rot_z, transform
 
     Ts = transform(rot_y(np.pi / 2)[:3, :3], [0.0, 0.0, 0.0])
     Te = transform((rot_z(0.6 + 0.3 * t) @ rot_y(np.pi / 2 + 0.4) @ rot_z(1.2 + t))[:3, :3],

@@ -110,7 +110,7 @@ import numpy
 c.append(time.process_time())
 import click
 from p105cli.cli.inputs import load_document
-from p105cli.kinematics.reader import read_mechanisms
+from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.formats.graph import structure_document
 from p105cli.kinematics.graph import analyse
 c.append(time.process_time())
@@ -154,7 +154,7 @@ def main() -> int:
     opts = ap.parse_args()
 
     from p105cli.kinematics.graph import analyse, loop_closure
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
     from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import read_any, write_step
 

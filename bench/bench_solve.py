@@ -45,7 +45,8 @@ sys.path.insert(0, str(REPO))
 from p105cli.fileio import write_text_atomically  # noqa: E402
 from p105cli.kinematics import solver  # noqa: E402
 from p105cli.kinematics.model import Link, Mechanism, Pair  # noqa: E402
-from p105cli.kinematics.placements import compose, rot_x, rot_z, su_parameters, trans_x, trans_z  # noqa: E402
+from p105cli.kinematics.placements import su_parameters  # noqa: E402
+from p105cli.kinematics.spatial import compose, rot_x, rot_z, trans_x, trans_z
 
 SHARED = Path(os.environ.get("P105_SHARED", REPO.parent / "shared"))
 REFERENCE = SHARED / "reference" / "dh_arms_and_loops.json"

@@ -61,7 +61,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from p105cli.cable.rod import RodSolution
-from p105cli.kinematics.placements import matrix_to_quaternion, quaternion_to_matrix
+from p105cli.kinematics.spatial import matrix_to_quaternion, quaternion_to_matrix
 
 __all__ = ["solve_patent", "patent_force"]
 

@@ -48,9 +48,8 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from p105cli.cable.scene import Scene, SceneError, pose_matrix, read_scene, scene_has_cables
-from p105cli.formats.poses import parse_poses
+from p105cli.formats.poses import parse_pose_file
 from p105cli.formats.text import FormatError
-from p105cli.step import decode_bytes
 
 __all__ = ["run_scene", "load_keypoints", "KeypointError", "scene_needs_cables",
            "mirror_solution", "symmetry_plane", "MAX_HALVINGS"]
@@ -76,12 +75,9 @@ def load_keypoints(path) -> list[dict]:
     """
     path = os.fspath(path)
     try:
-        with open(path, "rb") as fh:
-            text = decode_bytes(fh.read())
+        samples = parse_pose_file(path)
     except OSError as err:
         raise KeypointError(f"{path}: cannot read: {err.strerror}") from None
-    try:
-        samples = parse_poses(text, path)
     except FormatError as err:
         raise KeypointError(str(err)) from None
     out, last_t = [], -math.inf
@@ -162,7 +158,7 @@ def mirror_solution(sol, p0, nrm, variant="y"):
     """
     import dataclasses
 
-    from p105cli.kinematics.placements import matrix_to_quaternion, quaternion_to_matrix
+    from p105cli.kinematics.spatial import matrix_to_quaternion, quaternion_to_matrix
 
     M = np.eye(3) - 2.0 * np.outer(nrm, nrm)
     S = np.diag([1.0, -1.0, 1.0]) if variant == "y" else np.diag([-1.0, 1.0, 1.0])
@@ -205,7 +201,7 @@ def mirror_solution(sol, p0, nrm, variant="y"):
 
 
 def _interp_pose(Ta, Tb, f):
-    from p105cli.kinematics.placements import slerp
+    from p105cli.kinematics.spatial import slerp
     T = np.eye(4)
     T[:3, :3] = slerp(Ta[:3, :3], Tb[:3, :3], f)
     T[:3, 3] = (1 - f) * Ta[:3, 3] + f * Tb[:3, 3]

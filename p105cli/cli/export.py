@@ -12,15 +12,17 @@ from ._emit import emit_json, emit_p21
 
 def _convert(doc, schema: str, occt_compat: bool):
     """The document converted to ``schema`` (p105cli.part105.write_mechanism); diagnostics on stderr."""
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.part105.write_mechanism import write_mechanism
 
     with naming_source(doc):
-        mechanisms = read_mechanisms(doc)
+        model = ModelFile.of(doc)  # one population: the mechanism is read and converted from it
+        mechanisms = read_mechanisms(model)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
-    out, diagnostics = write_mechanism(mechanisms[0], schema, source=doc, occt_compat=occt_compat)
+    out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
     for message in diagnostics:
         diag("warning", f"{doc.source}: {message}")
     return out

@@ -62,13 +62,14 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
 
 def _mechanisms(doc, schema, name):
     """The profile the model is read as, and its mechanisms (only the one called ``name``)."""
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
     try:
         profile = profile_for_header(doc.header, schema).name
     except UnknownSchemaError as err:
         raise InputError(f"{doc.source}: {err}") from None
-    mechs = read_mechanisms(doc, schema)
+    mechs = read_mechanisms(ModelFile.of(doc, schema))  # the command's one population
     if name is not None:
         mechs = [m for m in mechs if m.name == name]
         if not mechs:
@@ -87,7 +88,7 @@ def _the_one(doc, mechs):
 
 def _enrich(doc, mechs, profile, to, input, output, tol):
     from p105cli.kinematics.graph import analyse
-    from p105cli.kinematics.graph_entities import EnrichError, enrich
+    from p105cli.part105.topology import EnrichError, enrich
     from ._emit import emit_json, emit_p21
 
     fmt = to or ("p21" if hasattr(doc, "text") else "json")

@@ -58,6 +58,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     given = _check(t_values, step, count, to, what)
     from p105cli.formats import samples
     from p105cli.motion import sampling
+    from p105cli.part105.motion import sample_model
 
     doc = load_document(input)
     plan = sampling.Plan(t=tuple(t_values) or None, step=step, count=count,
@@ -65,8 +66,8 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
                          quaternion=quaternion, ypr=ypr)
     try:
         with naming_source(doc):
-            result = sampling.sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
-                                           profile=schema)
+            result = sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
+                                  profile=schema)
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
     for inst, msg in result.skipped:

@@ -15,8 +15,10 @@ import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings, stderr_is_terminal
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
-from .options import SCHEMA_HELP_SHORT, angle_unit_option, check_tol, count_option, input_schema, \
+from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
+from .solve_rules import check_usage
+from .solve_scene import load_scene, model_scene, run_scene, scene_only
 
 FORMATS = ["model", "jsonl", "csv"]
 
@@ -90,49 +92,25 @@ def solve(**options):
     o = SimpleNamespace(**options)
     o.to_given = o.to is not None
     o.to = o.to or ("jsonl" if o.scene is not None else "model")
-    o.want = _check(o)
+    o.want = check_usage(o)
     from p105cli.formats.values import ANGLE_UNITS, LENGTH_UNITS
     o.lf, o.af = LENGTH_UNITS[o.length_unit], ANGLE_UNITS[o.angle_unit]
     o.pictures = (o.plot, o.animation)
-    o.scene_dict = _load_scene(o.scene) if o.scene is not None else None
+    o.scene_dict = load_scene(o.scene) if o.scene is not None else None
     if o.model is None:
-        return _scene_only(o)
-    doc, mech = _read_model(o.model, o.schema, o.mechanism)
+        return scene_only(o)
+    model, mech = _read_model(o.model, o.schema, o.mechanism)
+    doc = model.doc
     if o.scene_dict is None and getattr(doc, "scene", None) is not None:
-        o.to, o.scene_dict, o.scene = _model_scene(doc, o.model, o.to, o.to_given)
-    prog = _program(doc, mech, o.schema, o.count, o.step) if o.program else None
+        o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
+    prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
-    if _output(o, doc, mech, pl, motion, blocks, requests):
+    if _output(o, model, mech, pl, motion, blocks, requests):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
 
-def _check(o):
-    """The usage errors of the command line, in order; the requested branch invariant."""
-    _check_outputs(o.model, o.scene, o.to, o.plot, o.animation, o.resulting_paths)
-    check_tol(o.tol)
-    _check_motion(o.values, o.sets, o.sweeps, o.path, o.target_link, o.program)
-    _check_sampling(o.program, o.count, o.step)
-    want = _check_branch(o.branch, o.model, o.scene, o.path)
-    if o.model is None and o.scene is None:
-        o.model = "-"
-    stdin_users = [n for n, v in (("MODEL", o.model), ("--values", o.values), ("--path", o.path)) if v == "-"]
-    if len(stdin_users) > 1:
-        raise click.UsageError(f"only one of {' and '.join(stdin_users)} can read standard input")
-    return want
-
-
-def _scene_only(o):
-    """A scene without a model: its cables between fixed ends or along key points."""
-    if o.values is not None or o.sets or o.sweeps or o.path is not None:
-        raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
-    with open_output(o.output, (o.scene, o.keypoints)) as out:
-        ok = _run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures)
-    if not ok:
-        raise click.exceptions.Exit(ExitCode.FINDINGS)
-
-
-def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
+def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
     """Every block written (and the scene run on the motion); the warnings. True on findings."""
     from p105cli.formats.solve_records import Table, Tally, write_blocks
     tally = Tally(motion.inverse)
@@ -140,7 +118,7 @@ def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
     with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
         if o.to == "model":
             def write(result, links, t, offset):
-                _write_model(out, mech, result, doc, t, requests)
+                _write_model(out, model, mech, result, t, requests)
         else:
             table = Table(out, o.to, mech, pl, inverse=motion.inverse, length=o.lf, angle=o.af)
             table.header()
@@ -148,7 +126,7 @@ def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
         write_blocks(blocks, motion.t, write, tally, mech.link_names, placements)
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
-            if o.scene_dict is not None and not _run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
+            if o.scene_dict is not None and not run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
                                                            o.pictures):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
@@ -156,75 +134,24 @@ def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
     return tally.failed
 
 
-def _check_outputs(model, scene, to, plot, animation, resulting_paths):
-    if scene is not None and to != "jsonl":
-        raise click.UsageError("--scene writes JSON Lines (--to jsonl)")
-    for name, target in (("--plot", plot), ("--animate", animation)):
-        if target is not None and model is None and scene is None:
-            raise click.UsageError(f"{name} draws a scene's cables: it needs --scene (or a model with a scene)")
-    if resulting_paths and to != "model":
-        # the tables carry every link's placement already; the path entities are model output
-        diag("note", f"--resulting-path is written with --to model only; the {to} output has the link placements")
-
-
-def _check_motion(values, sets, sweeps, path, target_link, program):
-    """Which ways of giving a motion go together."""
-    forward = values is not None or bool(sets) or bool(sweeps)
-    if path is not None and target_link is None:
-        raise click.UsageError("--path needs --target-link")
-    if path is not None and forward:
-        raise click.UsageError("--path (inverse analysis) cannot be combined with --values, --set or --sweep")
-    if sweeps and values is not None:
-        raise click.UsageError("--sweep and --values cannot be combined")
-    if program and (forward or path is not None):
-        raise click.UsageError("--program runs the model's own motion: it cannot be combined with --values, "
-                               "--set, --sweep or --path")
-
-
-def _check_sampling(program, count, step):
-    import math
-    if (count is not None or step is not None) and not program:
-        raise click.UsageError("--count and --step sample a motion program: they need --program")
-    if count is not None and step is not None:
-        raise click.UsageError("give at most one of --count and --step")
-    if step is not None and not (step > 0.0 and math.isfinite(step)):
-        raise click.UsageError("--step must be a positive number")
-
-
-def _check_branch(branch, model, scene, path):
-    """The requested branch invariant (None: the initial state's)."""
-    want = {"initial": None, "+": 1, "-": -1}[branch]
-    if want is not None and (path is not None or (model is None and scene is not None)):
-        raise click.UsageError(f"--branch {branch}: the assembly branch is chosen in forward analysis of a model "
-                               "with closed loops" + (" (not with --path)" if path is not None else ""))
-    return want
-
-
 def _read_model(model, schema, mechanism):
+    """``(ModelFile, Mechanism)``: the command's one model file (one population: the program,
+    the results and the mechanism are read from it)."""
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.read_mechanism import read_mechanism
     doc = load_document(model)
     report_warnings(doc)
     with naming_source(doc):
-        return doc, read_mechanism(doc, schema, mechanism)
+        mf = ModelFile.of(doc, schema)
+        return mf, read_mechanism(mf, name=mechanism)
 
 
-def _model_scene(doc, model, to, to_given):
-    """The model carries its scene (a JSON model's "scene" block): run it as --scene would.
-    Returns the output format, the scene and its name."""
-    if not to_given:
-        to = "jsonl"
-    if to == "jsonl":
-        return to, doc.scene, model if not is_stdin(model) else "."
-    diag("note", f"{doc.source}: the model's scene is run with --to jsonl only")
-    return to, None, None
-
-
-def _program(doc, mech, schema, count, step):
+def _program(model, mech, count, step):
     from p105cli.part105.program import ProgramError, motion_program
-    source = source_of(doc)
+    source = source_of(model.doc)
     try:
-        with naming_source(doc):
-            return motion_program(doc, mech, schema, count, step, source, note=lambda m: diag("note", m))
+        with naming_source(model.doc):
+            return motion_program(model, mech, count, step, source, note=lambda m: diag("note", m))
     except ProgramError as err:
         raise InputError(str(err)) from None
 
@@ -289,49 +216,24 @@ def _target_frame(mech, link_name, frame_name):
 
 
 def _resulting_paths(mech, pl, specs, motion):
-    """The link frames whose resulting paths go into the model: --resulting-path, else the
-    target of an inverse analysis."""
-    from p105cli.part105.results import ResultingPathError, resulting_path_request
+    from p105cli.part105.results import ResultingPathError, resulting_path_requests
     try:
-        if specs:
-            return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
-        if motion.inverse:
-            spec = motion.link if motion.frame_name is None or motion.frame is None \
-                else f"{motion.link}:{motion.frame_name}"
-            return [resulting_path_request(mech, pl, spec, frame_matrix=motion.frame)]
+        return resulting_path_requests(mech, pl, specs, motion)
     except ResultingPathError as err:
         raise InputError(str(err)) from None
-    return []
 
 
-def _write_model(out, mech, result, doc, t, paths=()):
+def _write_model(out, model, mech, result, t, paths=()):
     """The input model plus the analysis results, in the input's format (Part 21 or JSON)."""
-    from p105cli.part105.results import add_results
+    from p105cli.part105.results import model_with_results
     from ._emit import emit_json, emit_p21
     try:
-        new, notes = add_results(doc, mech, result.Q, t, result.status, paths=paths, pl=result.plan)
+        new, notes = model_with_results(model, mech, result, t, paths)
     except ValueError as err:
-        raise InputError(f"{doc.source}: {err}") from None
-    if hasattr(doc, "text"):
+        raise InputError(f"{model.doc.source}: {err}") from None
+    if hasattr(model.doc, "text"):
         emit_p21(new, out)
     else:
         emit_json(new, out, False)
     for note in notes:
-        diag("note", f"{doc.source}: {note}")
-
-
-def _load_scene(path):
-    from p105cli.cable.run import SceneInputError, load_scene
-    try:
-        return load_scene(path)
-    except SceneInputError as err:
-        raise InputError(str(err)) from None
-
-
-def _run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None)) -> bool:
-    """The scene's effects on the motion as JSON Lines records; False on findings."""
-    from p105cli.cable import run
-    try:
-        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m))
-    except run.SceneInputError as err:
-        raise InputError(str(err)) from None
+        diag("note", f"{model.doc.source}: {note}")

@@ -33,8 +33,9 @@ import math
 
 import numpy as np
 
-from p105cli.kinematics.placements import (  # noqa: F401  (re-exported for the mechanism modules)
-    compose, inverse, rot_x, rot_y, rot_z, su_parameters, trans_x, trans_y, trans_z, transform,
+from p105cli.kinematics.placements import su_parameters  # noqa: F401  (re-exported for the mechanism modules)
+from p105cli.kinematics.spatial import (  # noqa: F401  (re-exported for the mechanism modules)
+    compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform,
 )
 
 TOL = 1e-9

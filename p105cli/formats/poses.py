@@ -26,7 +26,7 @@ import numpy as np
 
 from .text import FormatError, csv_rows, is_jsonl, jsonl_records, number
 
-__all__ = ["FormatError", "PoseSamples", "read_poses", "parse_poses", "TOL"]
+__all__ = ["FormatError", "PoseSamples", "read_poses", "parse_poses", "parse_pose_file", "TOL"]
 
 #: How far a file's rotation may be from orthonormal, and its bottom row from 0 0 0 1.
 TOL = 1e-6
@@ -55,6 +55,16 @@ def read_poses(text: str, source: str, *, length: float = 1.0):
     """``(t (N,) or None, poses (N, 4, 4))`` of a pose file, translations times ``length``."""
     samples = parse_poses(text, source, length=length)
     return samples.t, samples.poses
+
+
+def parse_pose_file(path: str, *, length: float = 1.0) -> PoseSamples:
+    """The samples of the pose file at ``path`` (read and decoded as every input is; an
+    unreadable file raises OSError)."""
+    from ..step import decode_bytes
+
+    with open(path, "rb") as fh:
+        text = decode_bytes(fh.read())
+    return parse_poses(text, path, length=length)
 
 
 def parse_poses(text: str, source: str, *, length: float = 1.0) -> PoseSamples:

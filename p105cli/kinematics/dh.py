@@ -60,9 +60,8 @@ from typing import Optional
 import numpy as np
 
 from .model import SI, Link, Mechanism, Pair, frozen_array
-from .placements import (
-    compose, inverse, rot_x, rot_y, rot_z, su_parameters, su_parameters_from_transform, trans_x, trans_z,
-)
+from .placements import su_parameters, su_parameters_from_transform
+from .spatial import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_z
 
 __all__ = [
     "CONVENTIONS", "JOINT_TYPES", "Z_TO_X", "DHJoint", "DHTable", "DHConversionError",

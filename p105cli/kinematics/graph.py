@@ -71,8 +71,7 @@ from .pairs import UnsupportedPairError
 from .solver import link_poses, loop_twists, plan, root_loop_twists
 from .spatial import hat3, inverse, left_jacobian_inverse, rotation_vector
 
-__all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "rotation_vector",
-           "length_columns"]
+__all__ = ["Structure", "Component", "analyse", "loop_closure", "DEFAULT_TOL", "length_columns"]
 
 #: Default relative rank tolerance (dimensionless).
 DEFAULT_TOL = 1e-8

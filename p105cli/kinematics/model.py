@@ -165,10 +165,10 @@ class Pair:
         return self.type.motion(q, **self.motion_params())
 
     def transform(self, q) -> np.ndarray:
-        """``T_link1_link2(q) = P1 @ M(q) @ inv(P2)``, batched."""
-        from .placements import inverse
+        """``T_link1_link2(q) = P1 @ M(q) @ inv(P2)``, batched (:func:`~.pairs.link_transform`)."""
+        from .pairs import link_transform
 
-        return self.P1 @ self.motion(q) @ inverse(self.P2)
+        return link_transform(self.P1, self.motion(q), self.P2)
 
 
 @dataclass(frozen=True)

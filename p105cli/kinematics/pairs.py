@@ -201,9 +201,11 @@ class UnsupportedPairError(NotImplementedError):
 
 # --------------------------------------------------------------------------- link transform
 
-def link_transform(P1, M, P2) -> np.ndarray:
-    """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast)."""
-    return compose(P1, M, inverse(P2))
+def link_transform(P1, M, P2=None, *, P2inv=None) -> np.ndarray:
+    """``T_link1_link2 = P1 @ M @ inverse(P2)`` (leading axes broadcast): THE pair transform
+    (``Pair.transform`` and the solver's forward kinematics compute it here). ``P2inv``:
+    ``inverse(P2)`` when the caller has it (the solver's plan keeps it per pair)."""
+    return compose(P1, M, inverse(P2) if P2inv is None else P2inv)
 
 
 # --------------------------------------------------------------------------- small builders

@@ -27,8 +27,8 @@ Conventions (read these before using any function)
 Contents
 --------
 
-Elementary transforms (:func:`rot_x` ... :func:`compose`), quaternions and
-:func:`slerp` are :mod:`p105cli.kinematics.spatial`'s, importable from here too.
+Elementary transforms (``rot_x`` ... ``compose``), quaternions and ``slerp`` are
+:mod:`p105cli.kinematics.spatial`'s (import them from there).
 
 Part 105 / Part 42 placements: :func:`build_axes`, :func:`axis2_placement_3d`,
 :func:`su_parameters`, :func:`su_to_axis2_placement_3d`,
@@ -46,24 +46,17 @@ from __future__ import annotations
 
 import numpy as np
 
-# The rotation algebra lives in spatial; its names stay importable from here.
-from .spatial import (  # noqa: F401
-    _f, _first_bad, _hom, _mat, _norm, _r3, _rot_part, _vec3,
-    compose, inverse, matrix_to_quaternion, quaternion_to_matrix, rot_x, rot_y, rot_z, slerp, trans_x,
-    trans_y, trans_z, transform,
-)
+# the argument checks are spatial's (one message format for both modules)
+from .spatial import _f, _first_bad, _hom, _mat, _norm, _r3, _rot_part, _vec3
 
 __all__ = [
     "DEGREE",
     "ANGLE_LOCK_TOL",
-    "rot_x", "rot_y", "rot_z", "trans_x", "trans_y", "trans_z",
-    "transform", "inverse", "compose",
     "build_axes", "axis2_placement_3d",
     "su_parameters", "su_to_axis2_placement_3d", "su_parameters_from_transform",
     "ypr_rotation", "ypr_from_matrix", "rotation_about_direction",
     "convert_spatial_to_ypr_rotation",
     "plane_angle_to_radian", "radian_to_plane_angle",
-    "matrix_to_quaternion", "quaternion_to_matrix", "slerp",
     "EULER_SEQUENCES", "matrix_to_euler", "euler_to_matrix",
 ]
 

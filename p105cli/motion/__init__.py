@@ -7,8 +7,10 @@ configuration interpolation, sampled at parameter values.
   rotations by slerp, synchronised on one parameter).
 - :mod:`p105cli.motion.configurations` -- configuration interpolation
   sequences (pair values over t) and their sampling.
-- :mod:`p105cli.motion.reader` -- both read from a Part 21 / JSON model
-  (AP242 path entities; both layouts' configuration sequences).
+- :mod:`p105cli.motion.sampling` -- the records of ``p105 interpolate``.
+
+Both are read from a Part 21 / JSON model by :mod:`p105cli.part105.motion` (AP242 path
+entities; both layouts' configuration sequences).
 
 Plain numpy; nothing here imports click.
 """

@@ -31,7 +31,8 @@ from typing import Mapping, Optional
 
 import numpy as np
 
-from p105cli.kinematics.placements import slerp, ypr_from_matrix, ypr_rotation
+from p105cli.kinematics.placements import ypr_from_matrix, ypr_rotation
+from p105cli.kinematics.spatial import slerp
 
 __all__ = ["INTERPOLATIONS", "ConfigurationNode", "ConfigurationSequence", "ConfigurationSamples",
            "sample_configurations"]

@@ -43,7 +43,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from p105cli.kinematics.placements import slerp, transform
+from p105cli.kinematics.spatial import slerp, transform
 from p105cli.kinematics.model import frozen_array
 
 __all__ = ["SEGMENT_KINDS", "PathSegment", "KinematicPath", "PathSamples", "PathError", "sample_path",

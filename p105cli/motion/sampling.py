@@ -1,5 +1,6 @@
-"""What ``p105 interpolate`` does, without the CLI: read and sample; the records are
-written by :mod:`p105cli.formats.samples`.
+"""The sampling of ``p105 interpolate``: a :class:`SampledModel` (paths and configuration
+sequences already read, by :func:`p105cli.part105.motion.sample_model`) yields its records as
+they are drawn; they are written by :mod:`p105cli.formats.samples`.
 
 Numbers leave here in SI (metres, radians).
 """
@@ -13,7 +14,7 @@ import numpy as np
 
 from .paths import PathError, parameter_grid, sample_path
 
-__all__ = ["Plan", "SamplingError", "SampledModel", "sample_model"]
+__all__ = ["Plan", "SamplingError", "SampledModel"]
 
 
 class SamplingError(ValueError):
@@ -80,7 +81,8 @@ class SampledModel:
         return cols
 
     def frames(self):
-        from p105cli.kinematics.placements import matrix_to_quaternion, ypr_from_matrix
+        from p105cli.kinematics.placements import ypr_from_matrix
+        from p105cli.kinematics.spatial import matrix_to_quaternion
 
         plan = self.plan
         for path in self.path_list:
@@ -124,42 +126,3 @@ class SampledModel:
                     yield {"type": "configuration", "sequence": seq.name, "t": _clean(s.t[i]),
                            "interval": int(s.interval[i]), "interpolation": s.interpolation[i],
                            "prescribed": bool(s.prescribed[i]), "pairs": pairs}
-
-
-def sample_model(doc, *, what: str = "all", paths=(), sequences=(), plan: Plan = Plan(),
-                 profile: str | None = None) -> SampledModel:
-    """Read what ``what`` asks for and check the request; sampling happens as the
-    records are drawn from the returned :class:`SampledModel`."""
-    from p105cli.kinematics.reader import population
-
-    pop, _ = population(doc, profile)
-    out = SampledModel(plan=plan)
-    if what in ("all", "paths"):
-        from .reader import read_paths
-
-        read = read_paths(doc, pop=pop)
-        out.skipped.extend(read.skipped)
-        missing = set(paths) - {p.name for p in read.paths}
-        if missing:
-            raise SamplingError(f"no path named {', '.join(repr(m) for m in sorted(missing))}")
-        out.path_list = [p for p in read.paths if not paths or p.name in paths]
-    if what in ("all", "configurations"):
-        from .reader import read_configuration_sequences
-
-        seqs, kinds, skipped = read_configuration_sequences(doc, pop=pop)
-        out.skipped.extend(skipped)
-        out.kinds = kinds
-        missing = set(sequences) - {q.name for q in seqs}
-        if missing:
-            raise SamplingError(f"no configuration sequence named {', '.join(repr(m) for m in sorted(missing))}")
-        out.sequence_list = [q for q in seqs if not sequences or q.name in sequences]
-    # check every requested t against every range before writing anything
-    for item in (*out.path_list, *out.sequence_list):
-        if plan.t is not None:
-            lo, hi = item.t_start, item.t_end
-            tol = 1e-12 * max(1.0, abs(lo), abs(hi))
-            bad = [t for t in plan.t if not (lo - tol <= t <= hi + tol)]
-            if bad:
-                raise SamplingError(f"#{item.id} {item.name!r}: t = {bad[0]!r} is outside its range "
-                                    f"[{lo!r}, {hi!r}]")
-    return out

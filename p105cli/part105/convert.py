@@ -55,15 +55,22 @@ class Conversion:
     references; :meth:`run` gives ``(header, records)`` and appends to ``diags``."""
 
     def __init__(self, mech, profile, source, occt_compat, diags):
+        """``source``: the ModelFile ``mech`` was read from (its population is the one this
+        conversion reads), or a document (typed here, over the records the output keeps)."""
+        given = source if isinstance(source, ModelFile) else None
+        source = given.doc if given is not None else source
         self.mech, self.profile, self.src, self.occt, self.diags = mech, profile, source, occt_compat, diags
         self.prof = PROFILES[profile]
         records = list(source.records())  # decoded once: the output keeps most of them as they are
         self.records = {r["id"]: r for r in records}
         self.order = list(self.records)
-        # the source typed by its schema, over the same records (none decoded twice): attributes
-        # by name (the lenient ModelFile), back references (the population's index)
-        self.pop = Population(records, mech.profile or profile_for_header(getattr(source, "header", {}) or {}))
-        self.mf = ModelFile(self.pop, lenient=True)
+        # the source typed by its schema: attributes by name (the lenient ModelFile), back
+        # references (the population's index)
+        if given is not None:
+            self.pop, self.mf = given.pop, given.lenient()
+        else:
+            self.pop = Population(records, mech.profile or profile_for_header(getattr(source, "header", {}) or {}))
+            self.mf = ModelFile(self.pop, lenient=True)
         self.types = {i: _types(r) for i, r in self.records.items()}
         self.extra_drop: set = set()  # non-kinematic source instances re-expressed (configurations)
         self.quiet: set = set()  # instances that may lose their last user without a diagnostic

@@ -19,7 +19,7 @@ import numpy as np
 
 from p105cli.kinematics.dh import Z_TO_X
 from p105cli.kinematics.pairs import PAIR_KINDS
-from p105cli.kinematics.placements import compose, inverse
+from p105cli.kinematics.spatial import compose, inverse
 
 from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from .catalogue import (COUPLED_FREEDOMS, FREEDOM_FLAGS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
@@ -298,7 +298,7 @@ class Emitter:
         CASCADE (which reads that select as a real) the equal rotation_about_direction."""
         if not self.occt:
             return typed("ypr_rotation", [self.A(x) for x in ypr])
-        from p105cli.kinematics.graph import rotation_vector
+        from p105cli.kinematics.spatial import rotation_vector
         from p105cli.kinematics.placements import ypr_rotation
 
         phi = np.asarray(rotation_vector(ypr_rotation(*ypr)), float)

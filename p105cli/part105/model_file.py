@@ -68,12 +68,27 @@ def open_population(doc, profile=None):
     prof = profile_for_header(getattr(doc, "header", {}))
     if prof.name != "ap214":
         return Population(doc, prof), prof.name
-    # AP214's long form has no su_parameters: probe for them before choosing
-    probe = Population(doc, prof)
-    name = choose_profile(prof.name, bool(probe.ids_of_type("su_parameters")))
-    if name == prof.name:
-        return probe, name
-    return Population(doc, get_profile(name)), name
+    # AP214's long form has no su_parameters: look for them in the document before choosing
+    if getattr(doc, "index", None) is None and getattr(doc, "data", None) is None:
+        doc = list(doc)  # records given as an iterable: read them once (a population would)
+    name = choose_profile(prof.name, _holds_instance_of(doc, "su_parameters"))
+    return Population(doc, prof if name == prof.name else get_profile(name)), name
+
+
+def _holds_instance_of(doc, entity: str) -> bool:
+    """Whether ``doc`` (a Part 21 file, a JSON document or a list of records) holds an instance
+    naming ``entity`` (simple, or a part of a complex instance), found without typing the file:
+    for an entity outside the schema (su_parameters in AP214) what a population would find."""
+    def names(rec) -> list:
+        return [p.get("type") for p in rec["complex"]] if "complex" in rec else [rec.get("type")]
+
+    index = getattr(doc, "index", None)
+    if index is not None and hasattr(doc, "record"):  # a Part 21 file: the type index
+        if entity in index.types:
+            return True
+        # instances the index leaves untyped (complex ones) are decoded
+        return any(entity in names(doc.record(index.ids[k])) for k, t in enumerate(index.types) if t is None)
+    return any(entity in names(r) for r in (doc.data if hasattr(doc, "data") else doc))
 
 
 class ContextScale:
@@ -415,6 +430,7 @@ class ModelFile:
         import numpy as np
 
         from ..kinematics import placements as pl
+        from ..kinematics import spatial
 
         axes = {a: self.direction(i, a) for a in ("axis1", "axis2", "axis3")}
         raw_scale = self.get(i, "scale", None)
@@ -430,12 +446,12 @@ class ModelFile:
                                   "is not a rigid placement")
         loc = self.ref(i, "local_origin", types=("cartesian_point",))
         xyz = self.vector(loc, "coordinates")
-        return pl.transform(R, [c * scale.length for c in xyz])
+        return spatial.transform(R, [c * scale.length for c in xyz])
 
     def item_defined_transformation(self, i, scale1: ContextScale, scale2: ContextScale) -> "np.ndarray":
         """``T_rep2_rep1`` of an item_defined_transformation: ``T(item_2) @ inv(T(item_1))``."""
-        from ..kinematics import placements as pl
+        from ..kinematics import spatial
 
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
-        return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))
+        return self.placement(b, scale2) @ spatial.inverse(self.placement(a, scale1))

@@ -29,6 +29,7 @@ from typing import Optional
 import numpy as np
 
 from ..motion.paths import KinematicPath, PathError, PathSegment
+from ..motion.sampling import Plan, SampledModel, SamplingError
 from ..schema.units import ANGLE, LENGTH
 from ..schema.values import number
 from ..step.errors import ModelError
@@ -36,7 +37,7 @@ from ..step.values import ref_id
 from .layout import link_name_of_representation
 from .model_file import ModelFile
 
-__all__ = ["read_paths", "read_configuration_sequences", "MotionReadResult"]
+__all__ = ["read_paths", "read_configuration_sequences", "MotionReadResult", "sample_model"]
 
 _SEGMENT_KIND = {
     "point_to_point_path": "point_to_point",
@@ -84,10 +85,10 @@ def _placement(pop, pid: Optional[int], length: float) -> np.ndarray:
     return placement_from_instance(pop, pop.instance(pid), length)
 
 
-def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult:
+def read_paths(doc, profile: str | None = None) -> MotionReadResult:
     """Every kinematic path of the model, SI units. ``doc``: a document, Population or
-    ModelFile (``pop``: the Population already built for ``doc``)."""
-    mf = ModelFile.of(pop if pop is not None else doc, profile)
+    ModelFile (the command's one: no population is built then)."""
+    mf = ModelFile.of(doc, profile)
     pop = mf.pop
     out = MotionReadResult()
     ents = pop.schema.entities
@@ -182,7 +183,7 @@ def _interpolation(inst) -> str:
     return _INTERPOLATION[name]
 
 
-def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
+def read_configuration_sequences(doc, profile: str | None = None):
     """``(sequences, kinds, skipped)``: every interpolated_configuration_sequence as a
     :class:`ConfigurationSequence` (pair values in SI, keyed by pair name as the
     mechanism reader names them), the pair kinds by name, and ``(#id, message)``
@@ -190,7 +191,7 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
     from ..motion.configurations import ConfigurationNode, ConfigurationSequence
     from .read_mechanism import PairValueReader
 
-    mf = ModelFile.of(pop if pop is not None else doc, profile)
+    mf = ModelFile.of(doc, profile)
     pop = mf.pop
     seq_ids = pop.ids_of_type("interpolated_configuration_sequence") \
         if "interpolated_configuration_sequence" in pop.schema.entities else []
@@ -233,3 +234,37 @@ def read_configuration_sequences(doc, profile: str | None = None, *, pop=None):
         except ValueError as err:
             skipped.append((sid, str(err)))
     return out, kinds, skipped
+
+
+def sample_model(doc, *, what: str = "all", paths=(), sequences=(), plan: Plan = Plan(),
+                 profile: str | None = None) -> SampledModel:
+    """Read what ``what`` asks for (``doc``: a document, Population or ModelFile) and check
+    the request; sampling happens as the records are drawn from the returned
+    :class:`~p105cli.motion.sampling.SampledModel`."""
+    mf = ModelFile.of(doc, profile)
+    out = SampledModel(plan=plan)
+    if what in ("all", "paths"):
+        read = read_paths(mf)
+        out.skipped.extend(read.skipped)
+        missing = set(paths) - {p.name for p in read.paths}
+        if missing:
+            raise SamplingError(f"no path named {', '.join(repr(m) for m in sorted(missing))}")
+        out.path_list = [p for p in read.paths if not paths or p.name in paths]
+    if what in ("all", "configurations"):
+        seqs, kinds, skipped = read_configuration_sequences(mf)
+        out.skipped.extend(skipped)
+        out.kinds = kinds
+        missing = set(sequences) - {q.name for q in seqs}
+        if missing:
+            raise SamplingError(f"no configuration sequence named {', '.join(repr(m) for m in sorted(missing))}")
+        out.sequence_list = [q for q in seqs if not sequences or q.name in sequences]
+    # check every requested t against every range before writing anything
+    for item in (*out.path_list, *out.sequence_list):
+        if plan.t is not None:
+            lo, hi = item.t_start, item.t_end
+            tol = 1e-12 * max(1.0, abs(lo), abs(hi))
+            bad = [t for t in plan.t if not (lo - tol <= t <= hi + tol)]
+            if bad:
+                raise SamplingError(f"#{item.id} {item.name!r}: t = {bad[0]!r} is outside its range "
+                                    f"[{lo!r}, {hi!r}]")
+    return out

@@ -1,11 +1,14 @@
 """A model's own motion program (its ``kinematic_control``), sampled for ``solve --program``.
 
-Moved as it was from the CLI (``cli/solve.py``'s ``_program``/``_program_of``); it still
-reads the document through a population of its own, until the model file is read once
-(``part105.model_file``) and this moves onto it.
+Read through the command's one :class:`~p105cli.part105.model_file.ModelFile` (the one its
+mechanism was read from): the configuration sequence or prescribed path by
+:mod:`p105cli.part105.motion`, its pairs and its link named as :mod:`p105cli.part105.layout`
+names them (the names of the mechanism).
 """
 
 from __future__ import annotations
+
+from .model_file import ModelFile
 
 __all__ = ["ProgramError", "motion_program"]
 
@@ -14,33 +17,32 @@ class ProgramError(ValueError):
     """A motion program that cannot be run; the message names the file and the ``#id``."""
 
 
-def motion_program(doc, mech, schema, count, step, source, note=None):
+def motion_program(model, mech, count, step, source, note=None):
     """The model's motion program, sampled: ``("values", t, driven)`` for a configuration
     sequence (the actuated pairs, else every pair it values), ``("path", t, poses, link,
     frame, frame name)`` for a prescribed path (``frame``: the frame of ``link`` on the
     path, None for the link frame).
 
-    ``count``/``step`` sample it (default: its nodes); ``source`` names the file in
+    ``model``: the ModelFile ``mech`` was read from (or a document, read with its own
+    profile); ``count``/``step`` sample it (default: its nodes); ``source`` names the file in
     errors; ``note(message)`` receives remarks (several programs: the first one runs)."""
     from p105cli.motion.sampling import SamplingError
 
     try:
-        return _program_of(doc, mech, schema, count, step, source, note or (lambda message: None))
+        return _program_of(ModelFile.of(model), mech, count, step, source, note or (lambda message: None))
     except SamplingError as err:
         raise ProgramError(f"{source}: {err}") from None
 
 
-def _program_of(doc, mech, schema, count, step, source, note):
-    from p105cli.part105.read_mechanism import population
+def _program_of(mf, mech, count, step, source, note):
     from p105cli.motion.configurations import sample_configurations
     from p105cli.motion.paths import PathError, sample_path
     from p105cli.motion.sampling import Plan
 
-    pop, _ = population(doc, schema)
     programs = []
-    if "kinematic_control" in pop.schema.entities:
-        for c in pop.ids_of_type("kinematic_control"):
-            v = pop.instance(c).get("contained_kinematic_programs")
+    if "kinematic_control" in mf.schema.entities:
+        for c in mf.ids_of_type("kinematic_control"):
+            v = mf.lenient().get(c, "contained_kinematic_programs", None)
             programs += [x["ref"] for x in (v if isinstance(v, list) else [v])
                          if isinstance(x, dict) and "ref" in x]
     if not programs:
@@ -50,10 +52,10 @@ def _program_of(doc, mech, schema, count, step, source, note):
     if len(programs) > 1:
         note(f"{source}: the model has {len(programs)} motion programs; running the first, #{prog}")
     plan = Plan(step=step, count=count, nodes=step is not None)
-    types = pop.instance(prog).types
+    types = mf.types(prog)
     if "interpolated_configuration_sequence" in types:
         from .motion import read_configuration_sequences
-        seqs, kinds, _ = read_configuration_sequences(doc, pop=pop)
+        seqs, kinds, _ = read_configuration_sequences(mf)
         seq = next(q for q in seqs if q.id == prog)
         t = plan.grid(seq.t_start, seq.t_end, [n.t for n in seq.nodes])
         sampled = sample_configurations(seq, t, kinds)
@@ -68,10 +70,10 @@ def _program_of(doc, mech, schema, count, step, source, note):
                 driven.update({(name, j): vals[:, j] for j in range(vals.shape[1])})
         return "values", t, driven
     from .motion import read_paths
-    paths = [p for p in read_paths(doc, pop=pop).paths if p.holder_id == prog]
+    paths = [p for p in read_paths(mf).paths if p.holder_id == prog]
     if not paths:
         raise ProgramError(f"{source}: #{prog}: the motion program is a "
-                           f"{'+'.join(sorted(pop.instance(prog).leaf_types))} that p105 cannot run "
+                           f"{'+'.join(sorted(mf.leaf_types(prog)))} that p105 cannot run "
                            "(it runs configuration sequences and prescribed paths with geometry)")
     path = paths[0]
     if path.link is None or path.link not in mech.link_names:

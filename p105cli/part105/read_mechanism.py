@@ -86,6 +86,7 @@ from typing import Optional
 import numpy as np
 
 from ..kinematics import placements as pl
+from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
@@ -95,10 +96,10 @@ from . import geometry
 from . import layout as lay
 from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
     range_on_values
-from .model_file import ContextScale, ModelFile, model_error, open_population
+from .model_file import ContextScale, ModelFile, model_error
 from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
-__all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "population", "choose_mechanism"]
+__all__ = ["read_mechanisms", "read_mechanism", "PairValueReader", "choose_mechanism"]
 
 _GEOMETRY_ATTRS = GEOMETRY_ATTRIBUTES
 
@@ -292,7 +293,7 @@ class _Reader:
             ids[key] = g
             holder_rep, T_link_geom = self._geometry_placement(g, reps[which - 1], frames[which - 1])
             s = d.scale(holder_rep)
-            T_pair_geom = pl.inverse(frames[which - 1]) @ T_link_geom
+            T_pair_geom = spatial.inverse(frames[which - 1]) @ T_link_geom
             fn = gs.surface_from_instance if "surface" in key else gs.curve_from_instance
             try:
                 obj = fn(d.pop, d.pop.instance(g), s.length, s.angle)
@@ -405,13 +406,6 @@ class _Reader:
 
 
 # --------------------------------------------------------------------------- entry points
-
-def population(doc, profile: str | None = None):
-    """``(Population, profile name)`` for ``doc``: FILE_SCHEMA's profile unless
-    ``profile`` is given, a 1996-layout AP214 file holding su_parameters read as
-    ``p105`` (:func:`p105cli.part105.model_file.open_population`)."""
-    return open_population(doc, profile)
-
 
 def read_mechanisms(doc, profile: str | None = None) -> list:
     """Every mechanism of ``doc`` as a :class:`~p105cli.kinematics.model.Mechanism`, in file order.

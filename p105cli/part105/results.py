@@ -1,9 +1,11 @@
 """Analysis results and resulting paths into a model: the solved configurations of ``p105 solve``
 as Part 105 instances added to the input model, in its layout.
 
-``add_results(doc, mech, Q, t, status, paths=..., pl=...)`` gives ``(document, notes)``;
-``resulting_path_request`` turns ``LINK[:FRAME]`` into a :class:`ResultingPath` (an error is a
-:class:`ResultingPathError`). Link placements come from the solver's forward kinematics
+``add_results(doc, mech, Q, t, status, paths=..., pl=...)`` gives ``(document, notes)``
+(``model_with_results`` for a solver result); ``resulting_path_request`` turns
+``LINK[:FRAME]`` into a :class:`ResultingPath`, ``resulting_path_requests`` the requests of a
+``solve`` run (an error is a :class:`ResultingPathError`). ``doc`` is the command's one
+ModelFile: no second population is built to place the results. Link placements come from the solver's forward kinematics
 (:func:`p105cli.kinematics.solver.forward`); the model's records are decoded once.
 """
 
@@ -11,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["WRITTEN_STATUSES", "add_results", "ResultingPath", "ResultingPathError", "controlling_pairs",
-           "resulting_path_request"]
+__all__ = ["WRITTEN_STATUSES", "add_results", "model_with_results", "ResultingPath", "ResultingPathError",
+           "controlling_pairs", "resulting_path_request", "resulting_path_requests"]
 
 
 class ResultingPathError(ValueError):
@@ -26,7 +28,8 @@ WRITTEN_STATUSES = ("ok", "out_of_range", "singular", "branch_change")
 
 def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     """A new document: ``doc``'s instances plus the solved configurations as Part 105 analysis
-    results, in the layout of ``mech.profile``.
+    results, in the layout of ``mech.profile``. ``doc``: the ModelFile ``mech`` was read from
+    (its population is the one the results are placed by), or a document.
 
     AP242: per configuration the ``*_pair_value`` instances and a
     ``mechanism_state_representation`` of the mechanism representation; with
@@ -54,6 +57,10 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
 
     from .pair_values import scalar_values, value_arguments, value_entity
 
+    from .model_file import ModelFile
+
+    given = doc if isinstance(doc, ModelFile) else None
+    doc = given.doc if given is not None else doc
     layout = "ap242" if mech.profile == "ap242" else "1996"
     lf, af = mech.units.length, mech.units.angle
     data = list(doc.records())
@@ -77,7 +84,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     def model_file():
         """The model typed by its schema, over the records as read (built once, when needed)."""
         if not typed_model:
-            typed_model.append(_model_file(doc, mech, data))
+            typed_model.append(given.lenient() if given is not None else _model_file(doc, mech, data))
         return typed_model[0]
 
     def value(p, q):
@@ -237,6 +244,27 @@ def resulting_path_request(mech, pl, spec: str, *, frame_matrix=None) -> Resulti
         raise ResultingPathError(f"--resulting-path {spec!r}: link {link!r} does not move (no pair moves it): "
                                "a resulting path needs at least one controlling joint")
     return ResultingPath(link, frame, T, pairs)
+
+
+def resulting_path_requests(mech, pl, specs, motion) -> list:
+    """The link frames whose resulting paths go into the model: ``specs`` (``LINK[:FRAME]``,
+    ``solve --resulting-path``), else the target of an inverse analysis (``motion``: a
+    :class:`~p105cli.motion.analysis.Motion`). Raises :class:`ResultingPathError`."""
+    if specs:
+        return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
+    if motion.inverse:
+        spec = motion.link if motion.frame_name is None or motion.frame is None \
+            else f"{motion.link}:{motion.frame_name}"
+        return [resulting_path_request(mech, pl, spec, frame_matrix=motion.frame)]
+    return []
+
+
+def model_with_results(model, mech, result, t, paths=()):
+    """``(document, notes)``: ``model`` (the ModelFile ``mech`` was read from) with the
+    analysis ``result`` (a :class:`~p105cli.kinematics.solver.MotionResult` or
+    :class:`~p105cli.kinematics.solver.PathResult`: ``Q``, ``status``, ``plan``) at parameters ``t`` added (:func:`add_results`); a ValueError
+    names what cannot be written."""
+    return add_results(model, mech, result.Q, t, result.status, paths=paths, pl=result.plan)
 
 
 def _length_of_context(mf, ctx_id, default: float) -> float:

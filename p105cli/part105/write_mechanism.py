@@ -20,7 +20,7 @@ Two modes:
   loops. Built with :class:`~p105cli.part105.builder.Builder` (units,
   contexts, placements, products) and the records of
   :class:`~p105cli.part105.emit.Emitter` (the kinematics).
-* ``source`` = the document the mechanism was read from: a *conversion*
+* ``source`` = the document (or ModelFile) the mechanism was read from: a *conversion*
   (:class:`~p105cli.part105.convert.Conversion`).
   Every instance outside the kinematic structure (products, shapes,
   geometry, units, contexts) is kept with its id; the kinematic instances
@@ -66,11 +66,12 @@ import math
 
 import numpy as np
 
-from p105cli.kinematics.placements import compose
+from p105cli.kinematics.spatial import compose
 from p105cli.step.values import ref_id
 
 from .catalogue import APPLICATION, PROFILES
 from .emit import SUPPORTED_KINDS, Emitter, IdBuilder, write_kinematics
+from .model_file import ModelFile
 
 __all__ = ["PROFILES", "write_mechanism", "SUPPORTED_KINDS"]
 
@@ -90,11 +91,12 @@ def write_mechanism(mech, profile: str, *, source=None, occt_compat: bool = Fals
         diags.append(f"--occt-compat applies to AP242 output only; ignored for {profile}")
         occt_compat = False
     other = []
+    mf, source = (source, source.doc) if isinstance(source, ModelFile) else (None, source)
     if source is None:
         header, data = _standalone(mech, profile, occt_compat, diags)
         name = "<generated>"
     else:
-        header, data = Conversion(mech, profile, source, occt_compat, diags).run()
+        header, data = Conversion(mech, profile, mf or source, occt_compat, diags).run()
         name = getattr(source, "source", "<input>")
         sections = list(getattr(source, "sections", ()) or ())
         if len(sections) > 1 or any(sec.parameters is not None for sec in sections):

@@ -18,7 +18,7 @@ from conftest import SHARED
 from p105cli.cable.helix import helix_frames as kirchhoff_helix
 from p105cli.cable.patent import solve_patent
 from p105cli.cable.rod import RodProblem, solve_rod
-from p105cli.kinematics.placements import matrix_to_quaternion, quaternion_to_matrix
+from p105cli.kinematics.spatial import matrix_to_quaternion, quaternion_to_matrix
 
 REF = {
     "a_cantilever_tipload_alpha1": {"tip_vertical_deflection_over_L": 0.30172077379981355,

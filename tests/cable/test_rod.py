@@ -20,9 +20,7 @@ from p105cli.cable.helix import helix_frames as kirchhoff_helix
 from p105cli.cable.rod import RodProblem, solve_rod, state_from_frames
 from p105cli.cable.rod.model import _Model
 from p105cli.cable.rod.quaternions import _pose_quat, _qconj, _qexp, _qmat, _qmul
-from p105cli.kinematics.placements import (
-    matrix_to_quaternion, quaternion_to_matrix, rot_x, rot_y, rot_z,
-)
+from p105cli.kinematics.spatial import matrix_to_quaternion, quaternion_to_matrix, rot_x, rot_y, rot_z
 
 CASES = {c["id"]: c for c in json.loads((SHARED / "reference" / "rod_cases.json").read_text())["cases"]}
 NOLOAD = np.zeros(3)

@@ -50,7 +50,7 @@ def puma(tmp_path_factory):
     from io import StringIO
     from p105cli.formats.dh_table import read_csv
     from p105cli.kinematics import dh
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import write_step
 
     table = read_csv((EXAMPLES / "puma560_dh.csv").read_text(), "standard")

@@ -10,7 +10,7 @@ import pytest
 
 from p105cli.cable.workflow import KeypointError, load_keypoints
 from p105cli.formats.poses import FormatError, parse_poses, read_poses
-from p105cli.kinematics.placements import compose, rot_z, trans_x
+from p105cli.kinematics.spatial import compose, rot_z, trans_x
 
 T0 = compose(rot_z(0.3), trans_x(2.0))
 T1 = compose(rot_z(-0.2), trans_x(1.0))

@@ -12,7 +12,7 @@ import numpy as np
 from p105cli.formats.solve_records import Table, Tally, write_blocks
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import trans_x
+from p105cli.kinematics.spatial import trans_x
 
 I4 = np.eye(4)
 

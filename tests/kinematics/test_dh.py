@@ -22,9 +22,8 @@ from conftest import EXAMPLES, SHARED
 from p105cli.formats import dh_table
 from p105cli.kinematics import dh
 from p105cli.kinematics.model import Mechanism, Pair
-from p105cli.kinematics.placements import (
-    compose, inverse, rot_x, rot_y, rot_z, su_parameters, trans_x, trans_z,
-)
+from p105cli.kinematics.placements import su_parameters
+from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_z
 
 REFERENCE = SHARED / "reference" / "dh_arms_and_loops.json"
 ARMS = ("Puma560", "UR5", "Panda")
@@ -433,7 +432,7 @@ def _cli(*args) -> int:
 
 
 def _read_model(path):
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
     from p105cli.step import read_any
     return read_mechanism(read_any(path.read_text(), str(path)))
 

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from p105cli.kinematics.graph import analyse, loop_closure, rotation_vector
+from p105cli.kinematics.graph import analyse, loop_closure
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import (axis2_placement_3d, compose, inverse, rot_x, rot_z, trans_x,
-                                           trans_z, ypr_rotation)
+from p105cli.kinematics.placements import axis2_placement_3d, ypr_rotation
+from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_z, rotation_vector, trans_x, trans_z
 
 # --------------------------------------------------------------------------- builders
 
@@ -489,7 +489,7 @@ LAYOUTS = ("ap214", "p105", "ap242")
 
 def _read(path):
     from p105cli.cli.inputs import load_document
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
     doc = load_document(str(path))
     return doc, read_mechanism(doc)
 
@@ -528,8 +528,8 @@ def _validate(doc):
 
 
 def _enriched(doc, profile="ap242"):
-    from p105cli.kinematics.graph_entities import enrich
-    from p105cli.kinematics.reader import read_mechanisms
+    from p105cli.part105.topology import enrich
+    from p105cli.part105.read_mechanism import read_mechanisms
     return enrich(doc, [(m, analyse(m)) for m in read_mechanisms(doc)], profile)
 
 
@@ -596,7 +596,7 @@ def test_enrich_is_idempotent():
 
 def test_enrich_refuses_the_1996_layout():
     from p105cli.cli.inputs import load_document
-    from p105cli.kinematics.graph_entities import EnrichError
+    from p105cli.part105.topology import EnrichError
     doc = load_document(str(CORPUS_DIR / "four_bar_ap214.stp"))
     with pytest.raises(EnrichError, match="AP214"):
         _enriched(doc, "ap214")

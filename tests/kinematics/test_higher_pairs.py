@@ -20,8 +20,9 @@ from p105cli.kinematics import geometry as G
 from p105cli.kinematics import pairs
 from p105cli.kinematics.pairs import PAIR_KINDS, PAIRS, UnsupportedPairError, pair_type
 from p105cli.kinematics.spatial import vee
-from p105cli.kinematics.placements import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, \
-    transform
+from p105cli.kinematics.spatial import (
+    compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform,
+)
 
 PI = math.pi
 RNG = np.random.default_rng(4105)

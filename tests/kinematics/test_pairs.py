@@ -15,9 +15,8 @@ from p105cli.corpus import mechanisms as cmech
 from p105cli.kinematics import pairs
 from p105cli.kinematics.pairs import PAIR_KINDS, PAIRS, UnsupportedPairError, pair_type
 from p105cli.kinematics.spatial import adjoint, hat, vee
-from p105cli.kinematics.placements import (
-    compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, ypr_rotation,
-)
+from p105cli.kinematics.placements import ypr_rotation
+from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z
 
 PI = math.pi
 

@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 
 from conftest import SHARED
 from p105cli.kinematics import placements as P
+from p105cli.kinematics import spatial as S
 
 PI = math.pi
 ATOL = 1e-12
@@ -69,18 +70,18 @@ def ang_diff(a, b):
 
 def test_elementary_closed_forms_and_positive_sense():
     t = 0.7
-    assert rot_err(P.rot_x(t), H(Rx3(t))) == 0.0
-    assert rot_err(P.rot_y(t), H(Ry3(t))) == 0.0
-    assert rot_err(P.rot_z(t), H(Rz3(t))) == 0.0
-    assert rot_err(P.trans_x(2.0), H(p=(2, 0, 0))) == 0.0
-    assert rot_err(P.trans_y(2.0), H(p=(0, 2, 0))) == 0.0
-    assert rot_err(P.trans_z(2.0), H(p=(0, 0, 2))) == 0.0
+    assert rot_err(S.rot_x(t), H(Rx3(t))) == 0.0
+    assert rot_err(S.rot_y(t), H(Ry3(t))) == 0.0
+    assert rot_err(S.rot_z(t), H(Rz3(t))) == 0.0
+    assert rot_err(S.trans_x(2.0), H(p=(2, 0, 0))) == 0.0
+    assert rot_err(S.trans_y(2.0), H(p=(0, 2, 0))) == 0.0
+    assert rot_err(S.trans_z(2.0), H(p=(0, 0, 2))) == 0.0
     # 5.2.3: positive = counter-clockwise looking from the tip of the axis: x -> y about z
-    assert np.allclose(P.rot_z(PI / 2)[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-15)
-    assert np.allclose(P.rot_x(PI / 2)[:3, :3] @ [0, 1, 0], [0, 0, 1], atol=1e-15)
-    assert np.allclose(P.rot_y(PI / 2)[:3, :3] @ [0, 0, 1], [1, 0, 0], atol=1e-15)
+    assert np.allclose(S.rot_z(PI / 2)[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-15)
+    assert np.allclose(S.rot_x(PI / 2)[:3, :3] @ [0, 1, 0], [0, 0, 1], atol=1e-15)
+    assert np.allclose(S.rot_y(PI / 2)[:3, :3] @ [0, 0, 1], [1, 0, 0], atol=1e-15)
     # scipy as a second method
-    for f, ax in ((P.rot_x, "x"), (P.rot_y, "y"), (P.rot_z, "z")):
+    for f, ax in ((S.rot_x, "x"), (S.rot_y, "y"), (S.rot_z, "z")):
         assert rot_err(f(t)[:3, :3], Rotation.from_euler(ax, t).as_matrix()) < 1e-15
 
 
@@ -88,21 +89,21 @@ def test_transform_inverse_compose():
     rng = np.random.default_rng(1)
     R = Rotation.random(50, random_state=2).as_matrix()
     p = rng.normal(size=(50, 3))
-    T = P.transform(R, p)
+    T = S.transform(R, p)
     assert T.shape == (50, 4, 4)
     assert np.array_equal(T[:, :3, :3], R) and np.array_equal(T[:, :3, 3], p)
     assert np.array_equal(T[:, 3], np.tile([0, 0, 0, 1.0], (50, 1)))
-    Ti = P.inverse(T)
+    Ti = S.inverse(T)
     assert rot_err(Ti, np.linalg.inv(T)) < 1e-13
-    assert rot_err(P.compose(T, Ti), np.broadcast_to(np.eye(4), T.shape)) < 1e-14
-    assert rot_err(P.compose(T[0], T[1], T[2]), T[0] @ T[1] @ T[2]) == 0.0
+    assert rot_err(S.compose(T, Ti), np.broadcast_to(np.eye(4), T.shape)) < 1e-14
+    assert rot_err(S.compose(T[0], T[1], T[2]), T[0] @ T[1] @ T[2]) == 0.0
     # broadcasting of leading axes
-    assert P.compose(T[0], T).shape == (50, 4, 4)
-    assert rot_err(P.transform(R[0]), H(R[0])) == 0.0
+    assert S.compose(T[0], T).shape == (50, 4, 4)
+    assert rot_err(S.transform(R[0]), H(R[0])) == 0.0
     with pytest.raises(ValueError):
-        P.inverse(np.eye(3))
+        S.inverse(np.eye(3))
     with pytest.raises(ValueError):
-        P.compose()
+        S.compose()
 
 
 # --------------------------------------------------------------------------- axis2_placement_3d
@@ -193,8 +194,8 @@ def test_su_parameters_note5_and_product(a, alpha, b, beta, c, gamma):
     prod = (H(p=(0, 0, c)) @ H(Rz3(gamma)) @ H(p=(a, 0, 0)) @ H(Rx3(alpha))
             @ H(p=(0, 0, b)) @ H(Rz3(beta)))
     assert rot_err(T, prod) < 1e-12
-    assert rot_err(P.compose(P.trans_z(c), P.rot_z(gamma), P.trans_x(a), P.rot_x(alpha),
-                             P.trans_z(b), P.rot_z(beta)), T) < 1e-12
+    assert rot_err(S.compose(S.trans_z(c), S.rot_z(gamma), S.trans_x(a), S.rot_x(alpha),
+                             S.trans_z(b), S.rot_z(beta)), T) < 1e-12
     for got, want in zip(P.su_to_axis2_placement_3d(a, alpha, b, beta, c, gamma), (loc, axis, ref)):
         assert rot_err(got, want) < 1e-12
 
@@ -238,7 +239,7 @@ def test_su_parameters_from_transform_round_trip():
     rng = np.random.default_rng(6)
     n = 2000
     R = Rotation.random(n, random_state=7).as_matrix()
-    T = P.transform(R, rng.normal(size=(n, 3)))
+    T = S.transform(R, rng.normal(size=(n, 3)))
     a, alpha, b, beta, c, gamma = P.su_parameters_from_transform(T)
     assert np.all(a >= 0.0)
     assert rot_err(P.su_parameters(a, alpha, b, beta, c, gamma), T) < 1e-10
@@ -254,7 +255,7 @@ def test_su_parameters_from_transform_round_trip():
         assert np.max(ang_diff(g, w) if w is not a0 else np.abs(g - w)) < 1e-10
     # parallel and coaxial axes
     for Tp in (P.su_parameters(0.5, 0.0, 0.0, 0.3, 0.2, 1.0), P.su_parameters(0.5, PI, 0.0, 0.3, 0.2, 1.0),
-               P.trans_z(0.7) @ P.rot_z(0.4), P.rot_x(PI) @ P.trans_z(1.0)):
+               S.trans_z(0.7) @ S.rot_z(0.4), S.rot_x(PI) @ S.trans_z(1.0)):
         s = P.su_parameters_from_transform(Tp)
         assert rot_err(P.su_parameters(*s), Tp) < 1e-14
         assert s[2] == 0.0 and s[1] in (0.0, PI)
@@ -286,15 +287,15 @@ def test_dh_standard_to_su_chain_reproduces_reference(name):
         assert row["joint"] == "revolute"
         su = P.su_parameters(row["a"], row["alpha"], -row["d"], PI, 0.0, PI)
         # su equals the inverse of the DH transform without the pair parameter
-        assert rot_err(su, P.inverse(P.compose(P.trans_z(row["d"]), P.trans_x(row["a"]),
-                                               P.rot_x(row["alpha"])))) < 1e-15
-        pair = P.rot_z(q[:, k] + row["offset"])
-        T = P.compose(T, np.eye(4), pair, P.inverse(su))
-        T_naive = P.compose(T_naive, pair, su)
-    T = P.compose(T, np.array(arm["tool"]))
+        assert rot_err(su, S.inverse(S.compose(S.trans_z(row["d"]), S.trans_x(row["a"]),
+                                               S.rot_x(row["alpha"])))) < 1e-15
+        pair = S.rot_z(q[:, k] + row["offset"])
+        T = S.compose(T, np.eye(4), pair, S.inverse(su))
+        T_naive = S.compose(T_naive, pair, su)
+    T = S.compose(T, np.array(arm["tool"]))
     assert rot_err(T, T_ref) < 1e-12
     # the naive composition (SU frame multiplied after the pair rotation) must fail
-    assert rot_err(P.compose(T_naive, np.array(arm["tool"])), T_ref) > 1e-2
+    assert rot_err(S.compose(T_naive, np.array(arm["tool"])), T_ref) > 1e-2
 
 
 def test_dh_modified_panda_chain():
@@ -308,8 +309,8 @@ def test_dh_modified_panda_chain():
     for k, row in enumerate(arm["dh"]):
         first = P.su_parameters(row["a"], row["alpha"], 0.0, 0.0, 0.0, 0.0)
         second = P.su_parameters(0.0, 0.0, -row["d"], 0.0, 0.0, 0.0)
-        T = P.compose(T, first, P.rot_z(q[:, k] + row["offset"]), P.inverse(second))
-    T = P.compose(T, np.array(arm["tool"]))
+        T = S.compose(T, first, S.rot_z(q[:, k] + row["offset"]), S.inverse(second))
+    T = S.compose(T, np.array(arm["tool"]))
     assert rot_err(T, T_ref) < 1e-12
 
 
@@ -329,20 +330,20 @@ def test_dh_prismatic_cylindrical_and_offsets_against_dh_product():
         qv = rng.uniform(-2, 2, n)
         qd = rng.uniform(-2, 2, n)
         if kind == "revolute":
-            A = P.compose(P.rot_z(qv + offset), P.trans_z(d), P.trans_x(a), P.rot_x(alpha))
+            A = S.compose(S.rot_z(qv + offset), S.trans_z(d), S.trans_x(a), S.rot_x(alpha))
             su = P.su_parameters(a, alpha, -d, PI - offset, 0.0, PI)
-            pair = P.rot_z(qv)
+            pair = S.rot_z(qv)
         elif kind == "prismatic":
-            A = P.compose(P.rot_z(theta), P.trans_z(qd), P.trans_x(a), P.rot_x(alpha))
+            A = S.compose(S.rot_z(theta), S.trans_z(qd), S.trans_x(a), S.rot_x(alpha))
             su = P.su_parameters(a, alpha, 0.0, PI - theta, 0.0, PI)
-            assert rot_err(P.rot_z(PI + (PI - theta)), P.rot_z(-theta)) < 1e-15
-            pair = P.trans_z(qd)
+            assert rot_err(S.rot_z(PI + (PI - theta)), S.rot_z(-theta)) < 1e-15
+            pair = S.trans_z(qd)
         else:
-            A = P.compose(P.rot_z(qv), P.trans_z(qd), P.trans_x(a), P.rot_x(alpha))
+            A = S.compose(S.rot_z(qv), S.trans_z(qd), S.trans_x(a), S.rot_x(alpha))
             su = P.su_parameters(a, alpha, 0.0, PI, 0.0, PI)
-            pair = P.compose(P.trans_z(qd), P.rot_z(qv))
-        T_dh = P.compose(T_dh, A)
-        T_su = P.compose(T_su, pair, P.inverse(su))
+            pair = S.compose(S.trans_z(qd), S.rot_z(qv))
+        T_dh = S.compose(T_dh, A)
+        T_su = S.compose(T_su, pair, S.inverse(su))
     assert rot_err(T_su, T_dh) < 1e-13
 
 
@@ -626,17 +627,17 @@ def test_plane_angle_units():
 def test_quaternion_against_scipy_and_sign_convention():
     R = Rotation.random(3000, random_state=9)
     M = R.as_matrix()
-    q = P.matrix_to_quaternion(M, order="xyzw")
+    q = S.matrix_to_quaternion(M, order="xyzw")
     assert rot_err(q, R.as_quat(canonical=True)) < 1e-14
-    q_wxyz = P.matrix_to_quaternion(M)
+    q_wxyz = S.matrix_to_quaternion(M)
     assert np.array_equal(q_wxyz, q[:, [3, 0, 1, 2]])
     assert np.all(q_wxyz[:, 0] >= 0.0)
     assert np.max(np.abs(np.linalg.norm(q, axis=1) - 1)) < 1e-15
-    assert rot_err(P.quaternion_to_matrix(q, order="xyzw"), M) < 1e-14
-    assert rot_err(P.quaternion_to_matrix(-q_wxyz), M) < 1e-14
-    assert rot_err(P.quaternion_to_matrix(q_wxyz * 3.0), M) < 1e-14
+    assert rot_err(S.quaternion_to_matrix(q, order="xyzw"), M) < 1e-14
+    assert rot_err(S.quaternion_to_matrix(-q_wxyz), M) < 1e-14
+    assert rot_err(S.quaternion_to_matrix(q_wxyz * 3.0), M) < 1e-14
     # 4x4 input
-    assert rot_err(P.matrix_to_quaternion(P.transform(M, np.ones(3))), q_wxyz) == 0.0
+    assert rot_err(S.matrix_to_quaternion(S.transform(M, np.ones(3))), q_wxyz) == 0.0
 
 
 def test_quaternion_half_turns_and_pivots():
@@ -655,16 +656,16 @@ def test_quaternion_half_turns_and_pivots():
                                       [0, 0, 1 / math.sqrt(2), -1 / math.sqrt(2)]),
     }
     for name, (M, want) in cases.items():
-        q = P.matrix_to_quaternion(M)
+        q = S.matrix_to_quaternion(M)
         assert rot_err(q, want) < 1e-15, name
-        assert rot_err(P.quaternion_to_matrix(q), M) < 1e-15, name
+        assert rot_err(S.quaternion_to_matrix(q), M) < 1e-15, name
     # exact zeros: the first non-zero component is made positive
-    q = P.matrix_to_quaternion(np.diag([-1.0, 1.0, -1.0]))
+    q = S.matrix_to_quaternion(np.diag([-1.0, 1.0, -1.0]))
     assert np.array_equal(q, [0.0, 0.0, 1.0, 0.0]) and not np.signbit(q).any()
     with pytest.raises(ValueError):
-        P.quaternion_to_matrix([0, 0, 0, 0])
+        S.quaternion_to_matrix([0, 0, 0, 0])
     with pytest.raises(ValueError):
-        P.matrix_to_quaternion(np.eye(3), order="xyz")
+        S.matrix_to_quaternion(np.eye(3), order="xyz")
 
 
 @FAST
@@ -673,7 +674,7 @@ def test_quaternion_closed_form(axis, angle):
     k = axis / np.linalg.norm(axis)
     want = np.r_[math.cos(angle / 2), math.sin(angle / 2) * k]
     want = want if want[0] >= 0 else -want
-    got = P.matrix_to_quaternion(P.rotation_about_direction(k, angle))
+    got = S.matrix_to_quaternion(P.rotation_about_direction(k, angle))
     if abs(want[0]) > 1e-8:
         assert rot_err(got, want) < 1e-13
 
@@ -758,26 +759,26 @@ def test_euler_continuous_across_the_lock_tolerance(seq):
 def test_conversions_batched_shapes():
     rng = np.random.default_rng(14)
     M = Rotation.random(35, random_state=15).as_matrix().reshape(5, 7, 3, 3)
-    T = P.transform(M, rng.normal(size=(5, 7, 3)))
+    T = S.transform(M, rng.normal(size=(5, 7, 3)))
     assert T.shape == (5, 7, 4, 4)
-    q = P.matrix_to_quaternion(T)
+    q = S.matrix_to_quaternion(T)
     e = P.matrix_to_euler(T, "ZYZ")
     ypr = P.ypr_from_matrix(T)
-    Ti = P.inverse(T)
+    Ti = S.inverse(T)
     s = P.su_parameters_from_transform(T)
     A = P.axis2_placement_3d(T[..., :3, 3], T[..., :3, 2], T[..., :3, 0])
     assert q.shape == (5, 7, 4) and e.shape == (5, 7, 3) and Ti.shape == (5, 7, 4, 4)
     assert all(v.shape == (5, 7) for v in ypr) and all(v.shape == (5, 7) for v in s)
     for i in range(5):
         for j in range(7):
-            assert np.array_equal(q[i, j], P.matrix_to_quaternion(T[i, j]))
+            assert np.array_equal(q[i, j], S.matrix_to_quaternion(T[i, j]))
             assert np.array_equal(e[i, j], P.matrix_to_euler(T[i, j], "ZYZ"))
-            assert np.array_equal(Ti[i, j], P.inverse(T[i, j]))
+            assert np.array_equal(Ti[i, j], S.inverse(T[i, j]))
             assert np.array_equal(A[i, j], P.axis2_placement_3d(T[i, j, :3, 3], T[i, j, :3, 2], T[i, j, :3, 0]))
             assert tuple(float(v[i, j]) for v in ypr) == tuple(float(v) for v in P.ypr_from_matrix(T[i, j]))
             assert tuple(float(v[i, j]) for v in s) == tuple(float(v) for v in P.su_parameters_from_transform(T[i, j]))
     assert rot_err(A, T) < 1e-14
-    assert rot_err(P.quaternion_to_matrix(q), M) < 1e-14
+    assert rot_err(S.quaternion_to_matrix(q), M) < 1e-14
     assert rot_err(P.euler_to_matrix(e, "ZYZ"), M) < 1e-14
     assert rot_err(P.ypr_rotation(*ypr), M) < 1e-14
 

@@ -17,7 +17,8 @@ import pytest
 from conftest import EXAMPLES, ROOT, SHARED
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import compose, inverse, rot_x, rot_z, su_parameters, trans_x, trans_z
+from p105cli.kinematics.placements import su_parameters
+from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_z, trans_x, trans_z
 
 REFERENCE = SHARED / "reference" / "dh_arms_and_loops.json"
 I4 = np.eye(4)
@@ -143,7 +144,8 @@ def test_forward_mixed_tree_over_several_blocks_matches_a_plain_product():
     # Revolute pairs forward and crossed backwards, with pair frames that do and do not commute
     # with the joint rotation, a prismatic pair, and more configurations than one block of the
     # batched evaluation: against the Part 105 product P1 M(q) P2^-1 written out per configuration.
-    from p105cli.kinematics.placements import transform, ypr_rotation
+    from p105cli.kinematics.placements import ypr_rotation
+    from p105cli.kinematics.spatial import transform
 
     rng = np.random.default_rng(11)
 
@@ -262,7 +264,8 @@ def test_spatial_loop_jacobian_matches_finite_differences():
     rng = np.random.default_rng(3)
 
     def rnd():
-        from p105cli.kinematics.placements import ypr_rotation, transform
+        from p105cli.kinematics.placements import ypr_rotation
+        from p105cli.kinematics.spatial import transform
         return transform(ypr_rotation(*rng.uniform(-1, 1, 3)), rng.uniform(-0.1, 0.1, 3))
 
     links = [Link(n) for n in "abcde"]
@@ -491,7 +494,7 @@ def test_cli_model_output_validates_and_reads_back(example, sweep, cli, tmp_path
     assert v.returncode == 0, v.stdout.decode()
     # The configurations written into the model are the ones the table reports (file units).
     from p105cli.cli.inputs import load_document
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
     j = cli("solve", src, "--sweep", sweep, "--to", "jsonl")
     conf = [x for x in _records(j.stdout) if x["type"] == "configuration"]
     doc = load_document(str(out))

@@ -20,7 +20,7 @@ from kinematics.test_solver import REFERENCE, _records, _reference_four_bar, fou
 from kinematics.test_solver_hard import four_bar_closed_form, offset_slider_crank, sigma_of
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import compose, rot_x, rot_y, rot_z
+from p105cli.kinematics.spatial import compose, rot_x, rot_y, rot_z
 
 UR5 = ROOT / "tests" / "data" / "corpus" / "ur5_arm_ap242.stp"
 OTHER = {"open": "crossed", "crossed": "open"}

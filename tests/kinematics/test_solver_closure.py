@@ -27,7 +27,7 @@ from p105cli.kinematics.graph import analyse, loop_closure
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.pairs import UnsupportedPairError
 from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_z, trans_x, trans_z
-from p105cli.kinematics.reader import read_mechanisms
+from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.step import read_any
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -15,7 +15,7 @@ import pytest
 from p105cli.kinematics import dh, geometry as G, solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.pairs import UnsupportedPairError
-from p105cli.kinematics.reader import read_mechanisms
+from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_z
 from p105cli.part105.write_mechanism import _forward_poses
 from p105cli.step import read_any
@@ -140,3 +140,21 @@ def test_pairs_without_a_motion():
     X, T, _ = solver.link_poses(pl, q, unsupported="identity")
     np.testing.assert_array_equal(X[pl.link_index["b"]], X[pl.link_index["a"]])
     assert _forward_poses(mech)["b"].tolist() == X[pl.link_index["a"]].tolist()
+
+
+def test_one_pair_transform_for_the_model_and_the_solver():
+    # Pair.transform, pairs.link_transform and the solver's pair_transform are one definition:
+    # P1 M(q) P2^-1 by hand, and the three agree to the last bit on a pair that is not revolute
+    # (a revolute pair has the solver's closed form, equal to round-off)
+    from p105cli.kinematics.pairs import link_transform
+
+    P1, P2 = compose(trans_x(0.3), rot_z(0.4)), compose(rot_x(0.2), trans_z(0.5))
+    pair = Pair("C", "cylindrical", "a", "b", P1, P2)
+    mech = Mechanism("one pair", [Link("a"), Link("b")], [pair], "a", initial={"C": (0.1, 0.7)})
+    pl = solver.plan(mech)
+    Q = np.array([[0.1, 0.7], [-0.4, 1.2]])
+    M = pair.motion(Q)
+    by_hand = np.einsum("ij,bjk,kl->bil", P1, M, np.linalg.inv(P2))
+    np.testing.assert_allclose(pair.transform(Q), by_hand, atol=1e-14)
+    assert np.array_equal(pair.transform(Q), link_transform(P1, M, P2))
+    assert np.array_equal(solver.pair_transform(pl, 0, Q), link_transform(P1, M, P2inv=pl.P2inv[0]))

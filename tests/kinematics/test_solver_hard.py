@@ -16,8 +16,8 @@ import pytest
 
 from p105cli.kinematics import solver
 from p105cli.kinematics.model import Link, Mechanism, Pair
-from p105cli.kinematics.placements import (compose, rot_x, rot_y, rot_z, trans_x, trans_y,
-                                           transform, ypr_from_matrix, ypr_rotation)
+from p105cli.kinematics.placements import ypr_from_matrix, ypr_rotation
+from p105cli.kinematics.spatial import compose, rot_x, rot_y, rot_z, trans_x, trans_y, transform
 from kinematics.test_solver import _dh_product, dh_mechanism, four_bar, link_angles, ref, wrap  # noqa: F401 - ref is a fixture
 
 I4 = np.eye(4)
@@ -344,7 +344,7 @@ def test_gear_train_over_twenty_turns_with_redundant_planar_loops():
     # steps of 4.3 rad. Truth: the pitch circles roll, so each gear turns by -r_in/r_out of its driver.
     from conftest import ROOT
     from p105cli.cli.inputs import load_document
-    from p105cli.kinematics.reader import read_mechanism
+    from p105cli.part105.read_mechanism import read_mechanism
 
     mech = read_mechanism(load_document(str(ROOT / "tests" / "data" / "corpus" / "gear_train_ap242.stp")))
     mesh12, mesh23 = mech.pair("mesh 1-2").params, mech.pair("mesh 2-3").params

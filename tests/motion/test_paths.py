@@ -6,7 +6,8 @@ import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
 from p105cli.kinematics import geometry as g
-from p105cli.kinematics.placements import transform, ypr_from_matrix, ypr_rotation
+from p105cli.kinematics.placements import ypr_from_matrix, ypr_rotation
+from p105cli.kinematics.spatial import transform
 from p105cli.motion.configurations import ConfigurationNode, ConfigurationSequence, sample_configurations
 from p105cli.motion.paths import KinematicPath, PathError, PathSegment, parameter_grid, sample_path
 
@@ -145,7 +146,7 @@ def test_configuration_interpolation_linear_hold_and_spherical_slerp():
 
 def test_ypr_round_trip_of_slerped_rotations_through_gimbal_lock():
     # pitch passes +pi/2 at s = 0.5: the sampled ypr still rebuilds the slerped rotation
-    from p105cli.kinematics.placements import rot_y
+    from p105cli.kinematics.spatial import rot_y
     ya = (0.0, 1.2, 0.0)
     yb = tuple(float(x) for x in ypr_from_matrix(rot_y(np.pi - 1.2)))  # pitch 1.2, yaw = roll = pi
     seq = ConfigurationSequence("g", [ConfigurationNode(0.0, {"S": ya}), ConfigurationNode(1.0, {"S": yb})])

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from p105cli.kinematics.reader import read_mechanisms
+from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.part105.write_mechanism import write_mechanism
 from p105cli.step import read_step
 

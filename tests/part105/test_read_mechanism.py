@@ -22,7 +22,7 @@ import pytest
 from p105cli.corpus.mechanisms import (MECHANISMS, Z_TO_X, configuration, pair_frames, resolved_limits,
                                        scalar_value)
 from p105cli.kinematics.model import Mechanism
-from p105cli.kinematics.placements import inverse
+from p105cli.kinematics.spatial import inverse
 from p105cli.part105.read_mechanism import read_mechanism, read_mechanisms
 from p105cli.step import DataSection, JsonDocument, ModelError, read_step
 
@@ -260,7 +260,8 @@ def _corpus_contact_transform(p, q):
     gives (the curve in the first pair frame, the point parameter and ypr angles).
     kinematics.pairs defines the point-on-planar-curve motion with the ypr measured from the
     curve's tangent frame instead, so Pair.transform does not close the corpus cam (reported)."""
-    from p105cli.kinematics.placements import transform, ypr_rotation
+    from p105cli.kinematics.placements import ypr_rotation
+    from p105cli.kinematics.spatial import transform
     C = p.params["curve"].evaluate(q[0])[0]
     return p.P1 @ transform(ypr_rotation(*q[1:]), C) @ inverse(p.P2)
 

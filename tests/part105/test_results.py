@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import EXAMPLES, ROOT
-from p105cli.kinematics.reader import read_mechanism
+from p105cli.part105.read_mechanism import read_mechanism
 from p105cli.kinematics.solver import forward, plan
 from p105cli.part105.results import ResultingPathError, add_results, resulting_path_request
 from p105cli.step import read_step

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from conftest import EXAMPLES, ROOT
-from p105cli.kinematics.placements import inverse
-from p105cli.kinematics.reader import read_mechanism
-from p105cli.motion.reader import read_paths
+from p105cli.kinematics.spatial import inverse
+from p105cli.part105.read_mechanism import read_mechanism
+from p105cli.part105.motion import read_paths
 from p105cli.rules.validate import validate_document
 from p105cli.step import read_step
 
@@ -208,7 +208,7 @@ def test_link_frame_without_an_item_gets_one(cli, tmp_path, profile):
     import io
 
     from p105cli.kinematics.model import Link, Mechanism, Pair
-    from p105cli.kinematics.placements import rot_z, trans_x
+    from p105cli.kinematics.spatial import rot_z, trans_x
     from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import write_step
 

@@ -19,8 +19,8 @@ import pytest
 from conftest import ROOT
 from p105cli.cli import main
 from p105cli.kinematics.model import FRAME_PARAMS, Link, Mechanism, Pair, Units
-from p105cli.kinematics.placements import compose, rot_x, rot_y, rot_z, transform
-from p105cli.kinematics.reader import read_mechanisms
+from p105cli.kinematics.spatial import compose, rot_x, rot_y, rot_z, transform
+from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.part105.write_mechanism import write_mechanism
 from p105cli.rules.validate import validate_document
 from p105cli.step import read_step, write_step

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from p105cli.kinematics.placements import matrix_to_quaternion
+from p105cli.kinematics.spatial import matrix_to_quaternion
 
 from .quaternions import _EYE3, _cross, _pose_quat, _qmat, _qmul, _slerp_mid
 

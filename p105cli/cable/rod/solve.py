@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from p105cli.kinematics.placements import matrix_to_quaternion
+from p105cli.kinematics.spatial import matrix_to_quaternion
 
 from .continuation import _solve_n
 from .model import _Model, auto_grading

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..pairs import UnsupportedPairError
+from ..pairs import UnsupportedPairError, link_transform
 from ..spatial import adjoint, inverse
 from .plan import Plan
 
@@ -34,7 +34,7 @@ def pair_transform(pl: Plan, k: int, Q, M=None) -> np.ndarray:
         return C[0] + np.cos(q)[:, None, None] * C[1] + np.sin(q)[:, None, None] * C[2]
     if M is None:
         M = t.motion(Q[:, sl], **pl.params[k])
-    return pl.P1[k] @ M @ pl.P2inv[k]
+    return link_transform(pl.P1[k], M, P2inv=pl.P2inv[k])
 
 
 _E = (np.diag([0.0, 0.0, 1.0, 1.0]), np.diag([1.0, 1.0, 0.0, 0.0]),
@@ -197,7 +197,7 @@ def link_poses(pl: Plan, q, *, world: bool = False, unsupported: str = "raise"):
             if unsupported == "identity":
                 T[k] = np.broadcast_to(np.eye(4), q.shape[:-1] + (4, 4))
             continue
-        T[k] = pl.P1[k] @ M @ pl.P2inv[k]
+        T[k] = link_transform(pl.P1[k], M, P2inv=pl.P2inv[k])
     eye = np.broadcast_to(np.eye(4), q.shape[:-1] + (4, 4))
     X = [None] * len(pl.link_names)
     for r in pl.roots:
