@@ -55,8 +55,9 @@ demo: $(STAMP)
 	$(P105) validate --schema p105 tests/data/corpus/*_p105.stp
 	@echo "demo: every step passed; outputs in build/"
 
+# two workers: the suite is CPU-bound and the machines have two cores or more
 test: $(STAMP)
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q -m "not slow" -n 2
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q
