@@ -43,9 +43,9 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     if not enrich and to == "p21":
         raise click.UsageError("--to p21 writes a model: use it with --enrich")
     doc = load_document(input)
-    profile, mechs = _mechanisms(doc, schema, mechanism)
+    model, profile, mechs = _mechanisms(doc, schema, mechanism)
     if enrich:
-        return _enrich(doc, mechs, profile, to, input, output, tol)
+        return _enrich(model, mechs, profile, to, input, output, tol)
     mech = _the_one(doc, mechs)
     from p105cli.formats.graph import render
     from p105cli.kinematics.graph import analyse
@@ -61,7 +61,8 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
 
 
 def _mechanisms(doc, schema, name):
-    """The profile the model is read as, and its mechanisms (only the one called ``name``)."""
+    """The model file (the command's one population), the profile it is read as, and its
+    mechanisms (only the one called ``name``)."""
     from p105cli.part105.model_file import ModelFile
     from p105cli.part105.read_mechanism import read_mechanisms
     from p105cli.schema.profiles import UnknownSchemaError, profile_for_header
@@ -69,12 +70,13 @@ def _mechanisms(doc, schema, name):
         profile = profile_for_header(doc.header, schema).name
     except UnknownSchemaError as err:
         raise InputError(f"{doc.source}: {err}") from None
-    mechs = read_mechanisms(ModelFile.of(doc, schema))  # the command's one population
+    model = ModelFile.of(doc, schema)  # the command's one population
+    mechs = read_mechanisms(model)
     if name is not None:
         mechs = [m for m in mechs if m.name == name]
         if not mechs:
             raise InputError(f"{doc.source}: no mechanism called {name!r}")
-    return profile, mechs
+    return model, profile, mechs
 
 
 def _the_one(doc, mechs):
@@ -86,14 +88,15 @@ def _the_one(doc, mechs):
     return mechs[0]
 
 
-def _enrich(doc, mechs, profile, to, input, output, tol):
+def _enrich(model, mechs, profile, to, input, output, tol):
     from p105cli.kinematics.graph import analyse
     from p105cli.part105.topology import EnrichError, enrich
     from ._emit import emit_json, emit_p21
 
+    doc = model.doc
     fmt = to or ("p21" if hasattr(doc, "text") else "json")
     try:
-        new, notes = enrich(doc, [(m, analyse(m, tol=tol)) for m in mechs], profile)
+        new, notes = enrich(model, [(m, analyse(m, tol=tol)) for m in mechs], profile)
     except EnrichError as err:
         raise InputError(f"{doc.source}: {err}") from None
     with open_output(output, (input,)) as out:

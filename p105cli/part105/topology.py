@@ -31,8 +31,8 @@ No click, no numpy.
 
 from __future__ import annotations
 
-from ..schema.values import refs
 from ..step.jsonmodel import extended
+from .model_file import ModelFile
 
 __all__ = ["EnrichError", "enrich"]
 
@@ -45,15 +45,14 @@ def _ref(i: int) -> dict:
     return {"ref": i}
 
 
-_refs = refs  # the ids of a list of references (schema/values.py)
+#: The structures enrich writes (subtypes of kinematic_topology_structure), each once per parent.
+_ADDED = ("kinematic_topology_tree_structure", "kinematic_topology_network_structure")
 
 
-def _simple_type(rec: dict):
-    return rec.get("type")
-
-
-def enrich(doc, analysed, profile: str):
-    """A new JsonDocument: ``doc``'s instances and header, plus graph entities.
+def enrich(model, analysed, profile: str):
+    """A new JsonDocument: the instances and header of ``model`` (a ModelFile, or a document),
+    plus graph entities. The file's joints and topology structures are read by attribute
+    name through the model file.
 
     ``analysed``: list of ``(mechanism, structure)`` (structures from
     :func:`analyse`); ``profile``: ``"ap242"`` (``"ap214"``/``"p105"`` raise
@@ -65,27 +64,25 @@ def enrich(doc, analysed, profile: str):
             "Part 105 layout) has no kinematic graph entities (the 1996 text's kinematic_tree_structure, "
             "kinematic_network_structure, kinematic_loop and oriented_joint are not in AP214's schema); "
             "the output would not conform to its FILE_SCHEMA")
-    data = list(doc.records())
-    by_id = {}
-    for rec in data:
-        by_id[rec["id"]] = rec
-    next_id = max(by_id, default=0) + 1
+    mf = ModelFile.of(model, profile).lenient()
+    data = list(mf.doc.records())
+    next_id = max((rec["id"] for rec in data), default=0) + 1
     notes, added = [], []
 
     joints_by_name = {}
-    topologies, existing = [], {}
-    for rec in data:
-        t = _simple_type(rec)
-        if t == "kinematic_joint":
-            args = rec.get("args") or []
-            if args and isinstance(args[0], str):
-                joints_by_name.setdefault(args[0], []).append(rec["id"])
-        elif t == "kinematic_topology_structure":
-            topologies.append(rec)
-        elif t in ("kinematic_topology_tree_structure", "kinematic_topology_network_structure"):
-            args = rec.get("args") or []
-            if len(args) >= 4 and isinstance(args[3], dict) and "ref" in args[3]:
-                existing.setdefault(args[3]["ref"], set()).add(t)
+    for jid in mf.ids_of_type("kinematic_joint"):
+        name = mf.get(jid, "name", None)
+        if isinstance(name, str):
+            joints_by_name.setdefault(name, []).append(jid)
+    # the topology structures proper, not their subtypes (tree, network, ... structures)
+    topologies = [t for t in mf.ids_of_type("kinematic_topology_structure")
+                  if mf.leaf_types(t) == {"kinematic_topology_structure"}]
+    existing = {}
+    for t in _ADDED:
+        for i in mf.ids_of_type(t):
+            parent = mf.ref(i, "parent")
+            if parent is not None:
+                existing.setdefault(parent, set()).add(t)
 
     def new(type_name, args):
         nonlocal next_id
@@ -101,36 +98,36 @@ def enrich(doc, analysed, profile: str):
             if jid is None:
                 cands = joints_by_name.get(p.joint) or joints_by_name.get(p.name) or []
                 jid = cands[0] if len(cands) == 1 else None
-            if jid is None or jid not in by_id or _simple_type(by_id[jid]) != "kinematic_joint":
+            if jid is None or not mf.is_a(jid, "kinematic_joint"):
                 raise EnrichError(f"mechanism {mech.name!r}: the kinematic_joint of pair {p.name!r} "
                                   "is not found in the file")
             joint_id[p.name] = jid
         wanted = set(joint_id.values())
-        topo = [r for r in topologies if wanted <= set(_refs((r.get("args") or [None, None])[1]))]
+        items = {t: mf.refs(t, "items") for t in topologies}
+        topo = sorted((t for t in topologies if wanted <= set(items[t])), key=lambda t: (len(items[t]), t))
         if not topo:
             raise EnrichError(f"mechanism {mech.name!r}: no kinematic_topology_structure holds its joints")
-        topo.sort(key=lambda r: len(_refs(r["args"][1])))
         top = topo[0]
-        context = top["args"][2]
-        have = existing.get(top["id"], set())
+        context = mf.get(top, "context_of_items", None)
+        have = existing.get(top, set())
 
         def oriented(pair_name, forward):
             return new("oriented_joint", ["", {"derived": True}, {"derived": True},
                                           _ref(joint_id[pair_name]), {"enum": "T" if forward else "F"}])
 
         if "kinematic_topology_tree_structure" in have:
-            notes.append(f"mechanism {mech.name!r}: #{top['id']} already has a tree structure; kept")
+            notes.append(f"mechanism {mech.name!r}: #{top} already has a tree structure; kept")
         elif st.tree:
-            items = [_ref(oriented(name, fwd)) for name, _parent, _child, fwd in st.tree]
+            tree_items = [_ref(oriented(name, fwd)) for name, _parent, _child, fwd in st.tree]
             new("kinematic_topology_tree_structure",
-                [f"{mech.name} spanning tree", items, context, _ref(top["id"])])
+                [f"{mech.name} spanning tree", tree_items, context, _ref(top)])
         if "kinematic_topology_network_structure" in have:
-            notes.append(f"mechanism {mech.name!r}: #{top['id']} already has a network structure; kept")
+            notes.append(f"mechanism {mech.name!r}: #{top} already has a network structure; kept")
         elif st.loops:
             loops = []
             for li, lp in enumerate(st.loops, 1):
                 edges = [_ref(oriented(name, fwd)) for name, fwd in lp]
                 loops.append(_ref(new("kinematic_loop", [f"loop {li}", edges])))
-            new("kinematic_topology_network_structure", [f"{mech.name} loops", loops, context, _ref(top["id"])])
+            new("kinematic_topology_network_structure", [f"{mech.name} loops", loops, context, _ref(top)])
 
-    return extended(doc, data, added), notes
+    return extended(mf.doc, data, added), notes
