@@ -267,8 +267,10 @@ def limit_attributes(value_name: str) -> Optional[tuple]:
 
 # =========================================================================== writing tables
 # What the writers (part105.write_mechanism, part105.emit, part105.convert) say in a file and
-# how they recognise the source's instances. Moved here from kinematics/writer.py; the reading
-# tables above may say the same in other words (the integrator merges the two).
+# how they recognise the source's instances. Where they say what a reading table says, they
+# are derived from it (HIGHER_GEOMETRY, HIGHER_VALUES); the rest is what only a writer needs:
+# which pair kinds are written, and with which range entity in each layout (pair_entity and
+# range_entity above name those entities).
 
 #: Low pair kinds p105 writes, in the order of ``SUPPORTED_KINDS``; the unit of each of their
 #: values comes from ``PairType.value_units`` (the one angle/length rule).
