@@ -127,7 +127,7 @@ def _scene_only(o):
     if o.values is not None or o.sets or o.sweeps or o.path is not None:
         raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
     with open_output(o.output, (o.scene, o.keypoints)) as out:
-        ok = _run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures)
+        ok = _run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures, o.timings)
     if not ok:
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
@@ -149,7 +149,7 @@ def _output(o, doc, mech, pl, motion, blocks, requests) -> bool:
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
             if o.scene_dict is not None and not _run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
-                                                           o.pictures):
+                                                           o.pictures, o.timings):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
@@ -328,10 +328,11 @@ def _load_scene(path):
         raise InputError(str(err)) from None
 
 
-def _run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None)) -> bool:
+def _run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None), timings=True) -> bool:
     """The scene's effects on the motion as JSON Lines records; False on findings."""
     from p105cli.cable import run
     try:
-        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m))
+        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m),
+                       timings=timings)
     except run.SceneInputError as err:
         raise InputError(str(err)) from None
