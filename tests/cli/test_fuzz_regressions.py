@@ -1,0 +1,79 @@
+"""Inputs ``tests/fuzz_commands.py`` found ending in an internal error (exit 3): each one now
+a clear message naming its ``#id`` (or FILE:LINE:COL) and exit 2, the same for every command
+that reads the broken part."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from conftest import EXAMPLES, SHARED
+
+CORPUS = EXAMPLES.parent / "tests" / "data" / "corpus"
+
+
+def _no_crash(r):
+    text = r.stderr.decode()
+    assert r.returncode in (0, 1, 2) and "internal error" not in text and "Traceback" not in text, text
+    return text
+
+
+def _edited(tmp_path, stem, old, new, name="input.stp"):
+    text = (CORPUS / f"{stem}.stp").read_text()
+    assert old in text
+    path = tmp_path / name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize("command", [["solve", "--program"], ["interpolate"]], ids=" ".join)
+def test_a_dangling_configuration_in_a_1996_sequence_is_named(p105, tmp_path, command):
+    # was KeyError: 999 (read_configuration_sequences looked the reference up unchecked)
+    path = _edited(tmp_path, "four_bar_ap214", "#224=CONFIGURATION_INTERPOLATION(#217,#222,",
+                   "#224=CONFIGURATION_INTERPOLATION(#217,#999,")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert (f"{path}: #224: next_configuration_definition of configuration_interpolation refers to #999, "
+            "which is not in the file") in _no_crash(r)
+
+
+@pytest.mark.parametrize("command", [["solve", "--program"], ["interpolate"]], ids=" ".join)
+def test_a_configuration_reference_to_the_wrong_entity_is_named(p105, tmp_path, command):
+    # was SchemaError (exit 3): #1 is no configuration_definition, it has no t_parameter
+    path = _edited(tmp_path, "four_bar_ap214", "#224=CONFIGURATION_INTERPOLATION(#217,#222,",
+                   "#224=CONFIGURATION_INTERPOLATION(#217,#1,")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert "#1: " in _no_crash(r) and "has no attribute 't_parameter'" in r.stderr.decode()
+
+
+def test_a_dangling_state_in_an_ap242_sequence_is_named(p105, tmp_path):
+    # was KeyError: 9999 (exit 3)
+    path = _edited(tmp_path, "four_bar_ap242", "#223=INTERPOLATED_CONFIGURATION_SEGMENT(#211,",
+                   "#223=INTERPOLATED_CONFIGURATION_SEGMENT(#9999,")
+    r = p105("interpolate", path)
+    assert r.returncode == 2
+    assert (f"{path}: #223: state of interpolated_configuration_segment refers to #9999, which is not in "
+            "the file") in _no_crash(r)
+
+
+def test_a_json_instance_id_beyond_64_bits_is_malformed_input(p105, tmp_path):
+    # was OverflowError (exit 3) in every command but parse, which accepted it
+    doc = json.loads(p105("parse", CORPUS / "four_bar_ap242.stp").stdout)
+    doc["data"][0]["id"] = 2**63
+    path = tmp_path / "big_id.json"
+    path.write_text(json.dumps(doc))
+    for command in (["parse"], ["graph"], ["solve"], ["export", "--schema", "ap214"], ["interpolate"]):
+        r = p105(*command, path)
+        assert r.returncode == 2, command
+        assert r.stderr.decode() == (f"p105: error: {path}:/data/0: instance id 9223372036854775808 is too "
+                                     "large (at most 9223372036854775807)\n"), command
+    v = p105("validate", path)
+    assert v.returncode == 2 and "is too large" in v.stdout.decode()
+
+
+@pytest.mark.skipif(not (SHARED / "external" / "crashes" / "D08.json").is_file(), reason="no shared files")
+def test_the_shared_d08_is_refused_cleanly(p105):
+    r = p105("graph", SHARED / "external" / "crashes" / "D08.json")
+    assert r.returncode == 2 and "is too large" in _no_crash(r)
