@@ -237,6 +237,7 @@ def _start(o, doc, mech, prog):
     from p105cli.motion.analysis import analyse_motion
     try:
         pl = solver.plan(mech)
+        _check_pair_parameters(o, mech, pl)
         if o.want is not None and prog is not None and prog[0] == "path":
             raise click.UsageError(f"--branch {o.branch}: the model's program is a prescribed path (inverse "
                                    "analysis): the assembly branch is chosen in forward analysis")
@@ -252,6 +253,25 @@ def _start(o, doc, mech, prog):
     except solver.SolveError as err:
         raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
     return pl, motion, itertools.chain([first], blocks)
+
+
+def _check_pair_parameters(o, mech, pl):
+    """A pair whose motion refuses its parameters or initial values (a rule of the model
+    broken, e.g. a universal pair's skew angle against WR1) cannot be solved: malformed
+    input naming the pair (exit 2), before the solver meets it."""
+    import numpy as np
+    q0 = np.asarray(mech.initial_vector(), dtype=float)
+    for k, kind in enumerate(pl.types):
+        try:
+            kind.motion(q0[pl.slices[k]], **pl.params[k])
+        except ValueError as err:
+            name = pl.pair_names[k]
+            iid = (getattr(mech.pair(name), "ids", None) or {}).get("pair")
+            where = f"#{iid}: " if iid is not None else ""
+            raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {where}mechanism {mech.name!r}: "
+                             f"pair {name!r}: {err}") from None
+        except NotImplementedError:  # no closed-form motion (higher pairs): the solver's own business
+            pass
 
 
 def _motion(o, mech, prog):

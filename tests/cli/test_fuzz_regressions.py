@@ -77,3 +77,17 @@ def test_a_json_instance_id_beyond_64_bits_is_malformed_input(p105, tmp_path):
 def test_the_shared_d08_is_refused_cleanly(p105):
     r = p105("graph", SHARED / "external" / "crashes" / "D08.json")
     assert r.returncode == 2 and "is too large" in _no_crash(r)
+
+
+@pytest.mark.skipif(not (SHARED / "external" / "crashes" / "D05.stp").is_file(), reason="no shared files")
+def test_a_pair_parameter_its_motion_refuses_is_malformed_input_for_solve(p105):
+    # was ValueError (exit 3) from the universal pair's motion: its skew angle breaks WR1;
+    # graph, lenient, says the pair has no motion and goes on
+    path = SHARED / "external" / "crashes" / "D05.stp"
+    r = p105("solve", "--to", "jsonl", path)
+    assert r.returncode == 2
+    assert _no_crash(r).splitlines()[-1] == (
+        f"p105: error: {path}: #142: mechanism 'sph_univ': pair 'J2': universal pair: WR1 requires "
+        "cos(skew_angle) > 0 (the axes' offset from a right angle must be acute)")
+    g = p105("graph", path)
+    assert g.returncode == 0 and "pair 'J2' (universal): no motion available" in g.stderr.decode()
