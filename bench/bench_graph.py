@@ -12,7 +12,7 @@ frames at one random world placement, so every loop closes exactly at
 ``q = 0``): a random spanning tree of revolute, prismatic, cylindrical,
 universal and spherical pairs plus ``loops`` chords (spherical and
 revolute). It is written as an AP242 Part 21 file with
-:func:`p105cli.kinematics.writer.write_mechanism` and timed through the real
+:func:`p105cli.part105.write_mechanism.write_mechanism` and timed through the real
 CLI in a fresh interpreter (start-up included), best of ``--repeat``; the
 in-process stages (reading, analysis, one loop-closure evaluation for a
 batch of states) are timed on their own.
@@ -155,7 +155,7 @@ def main() -> int:
 
     from p105cli.kinematics.graph import analyse, loop_closure
     from p105cli.kinematics.reader import read_mechanism
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import read_any, write_step
 
     rows = []

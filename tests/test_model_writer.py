@@ -1,4 +1,4 @@
-"""The model writer (p105cli.kinematics.writer) and `p105 export --schema`.
+"""The model writer (p105cli.part105.write_mechanism) and `p105 export --schema`.
 
 Truth is independent of the writer: the corpus's own files of each layout,
 written by p105cli.corpus from its mechanism descriptions, read by the
@@ -21,7 +21,7 @@ from p105cli.cli import main
 from p105cli.kinematics.model import FRAME_PARAMS, Link, Mechanism, Pair, Units
 from p105cli.kinematics.placements import compose, rot_x, rot_y, rot_z, transform
 from p105cli.kinematics.reader import read_mechanisms
-from p105cli.kinematics.writer import write_mechanism
+from p105cli.part105.write_mechanism import write_mechanism
 from p105cli.rules.validate import validate_document
 from p105cli.step import read_step, write_step
 

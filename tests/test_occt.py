@@ -21,7 +21,7 @@ from OCP.STEPControl import STEPControl_Reader  # noqa: E402
 
 from conftest import ROOT  # noqa: E402
 from p105cli.kinematics.reader import read_mechanisms  # noqa: E402
-from p105cli.kinematics.writer import write_mechanism  # noqa: E402
+from p105cli.part105.write_mechanism import write_mechanism  # noqa: E402
 from p105cli.step import read_step, write_step  # noqa: E402
 
 CORPUS = ROOT / "tests" / "data" / "corpus"

@@ -429,7 +429,7 @@ def test_cli_bad_values_are_exit_2_with_the_place(text, where, cli):
 
 def test_cli_inverse_analysis_with_a_jsonl_path(ref, tmp_path, cli):
     arm = ref["arms"]["Puma560"]
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import write_json
     mech = dh_mechanism(arm, su=False)
     q_path = np.array([0.1, 0.5, -0.4, 0.3, 0.8, -0.2]) + np.linspace(0, 1, 5)[:, None] * 0.2

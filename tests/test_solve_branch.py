@@ -33,7 +33,7 @@ def fb():
 
 
 def _model_file(mech, tmp_path, name="m.json"):
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import write_json
     doc, _ = write_mechanism(mech, "ap242")
     path = tmp_path / name

@@ -209,7 +209,7 @@ def test_link_frame_without_an_item_gets_one(cli, tmp_path, profile):
 
     from p105cli.kinematics.model import Link, Mechanism, Pair
     from p105cli.kinematics.placements import rot_z, trans_x
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from p105cli.step import write_step
 
     m = Mechanism("arm", [Link("ground"), Link("arm")],

@@ -82,7 +82,7 @@ def _write_table(text, source, convention, deg, name, to, input, output):
 
 def _write_model(text, source, convention, deg, name, schema, to, input, output):
     from p105cli.kinematics import dh
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
     from ._emit import emit_json, emit_p21
 
     table = _table(text, source, convention, deg, name)

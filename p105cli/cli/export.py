@@ -11,9 +11,9 @@ from ._emit import emit_json, emit_p21
 
 
 def _convert(doc, schema: str, occt_compat: bool):
-    """The document converted to ``schema`` (p105cli.kinematics.writer); diagnostics on stderr."""
+    """The document converted to ``schema`` (p105cli.part105.write_mechanism); diagnostics on stderr."""
     from p105cli.part105.read_mechanism import read_mechanisms
-    from p105cli.kinematics.writer import write_mechanism
+    from p105cli.part105.write_mechanism import write_mechanism
 
     with naming_source(doc):
         mechanisms = read_mechanisms(doc)

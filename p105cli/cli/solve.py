@@ -311,7 +311,7 @@ def _target_frame(mech, link_name, frame_name):
 def _resulting_paths(mech, pl, specs, motion):
     """The link frames whose resulting paths go into the model: --resulting-path, else the
     target of an inverse analysis."""
-    from p105cli.kinematics.motion_io import MotionInputError, resulting_path_request
+    from p105cli.part105.results import ResultingPathError, resulting_path_request
     try:
         if specs:
             return [resulting_path_request(mech, pl, spec) for spec in dict.fromkeys(specs)]
@@ -319,14 +319,14 @@ def _resulting_paths(mech, pl, specs, motion):
             spec = motion.link if motion.frame_name is None or motion.frame is None \
                 else f"{motion.link}:{motion.frame_name}"
             return [resulting_path_request(mech, pl, spec, frame_matrix=motion.frame)]
-    except MotionInputError as err:
+    except ResultingPathError as err:
         raise InputError(str(err)) from None
     return []
 
 
 def _write_model(out, mech, result, doc, t, paths=()):
     """The input model plus the analysis results, in the input's format (Part 21 or JSON)."""
-    from p105cli.kinematics.motion_io import add_results
+    from p105cli.part105.results import add_results
     from ._emit import emit_json, emit_p21
     try:
         new, notes = add_results(doc, mech, result.Q, t, result.status, paths=paths, pl=result.plan)

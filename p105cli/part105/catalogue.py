@@ -263,3 +263,74 @@ def limit_attributes(value_name: str) -> Optional[tuple]:
     """``(lower_limit_..., upper_limit_...)`` bounding a model value, or None if none does."""
     s = LIMIT_SUFFIX.get(value_name)
     return None if s is None else (f"lower_limit_{s}", f"upper_limit_{s}")
+
+
+# =========================================================================== writing tables
+# What the writers (part105.write_mechanism, part105.emit, part105.convert) say in a file and
+# how they recognise the source's instances. Moved here from kinematics/writer.py; the reading
+# tables above may say the same in other words (the integrator merges the two).
+
+#: Low pair kinds p105 writes, in the order of ``SUPPORTED_KINDS``; the unit of each of their
+#: values comes from ``PairType.value_units`` (the one angle/length rule).
+WRITTEN_LOW_KINDS = ("revolute", "prismatic", "screw", "cylindrical", "spherical", "universal", "homokinetic",
+                     "planar", "unconstrained", "fully_constrained", "gear", "rack_and_pinion")
+
+#: Higher pairs, as the writers use them: their geometry (params key, which pair frame it is
+#: given in), in the order of the pair's attributes, and whether an ``orientation`` flag
+#: follows (from HIGHER_PAIR_GEOMETRY and HIGHER_PAIR_ORIENTATION above).
+HIGHER_GEOMETRY = {kind: (tuple((key, which) for _attr, key, which in spec), kind in HIGHER_PAIR_ORIENTATION)
+                   for kind, spec in HIGHER_PAIR_GEOMETRY.items()}
+
+#: Higher pair values, as the writers use them: ("point", geometry key) for a point on that
+#: curve/surface (1 or 2 model values), "ypr" for an orientation (3 values), "A" for a plane
+#: angle (from HIGHER_PAIR_VALUES above).
+HIGHER_VALUES = {kind: tuple(("point", key) if family == "point" else family for _attr, family, key in spec)
+                 for kind, spec in HIGHER_PAIR_VALUES.items()}
+
+#: Higher pairs whose limits are written: a trimmed curve / rectangular trimmed surface of the
+#: pair's geometry for the point parameter(s), and yaw, pitch, roll limits.
+WRITTEN_HIGHER_RANGES = ("point_on_planar_curve", "point_on_surface")
+
+#: Model-only parameters of higher pairs that the file cannot carry (with their defaults).
+HIGHER_PARAMS_NOT_IN_FILE = {"reference_parameter_1": 0.0, "reference_parameter_2": 0.0,
+                             "point_on_surface_2": None}
+
+#: AP242: the derived freedom flags (t_x, t_y, t_z, r_x, r_y, r_z) of the low-order pairs,
+#: which are also the freedoms an actuated pair drives. Screw, gear and rack-and-pinion
+#: pairs are low_order_kinematic_pair_with_motion_coupling subtypes (no flags).
+FREEDOM_FLAGS = {
+    "revolute": (0, 0, 0, 0, 0, 1), "prismatic": (1, 0, 0, 0, 0, 0), "cylindrical": (0, 0, 1, 0, 0, 1),
+    "spherical": (0, 0, 0, 1, 1, 1), "universal": (0, 0, 0, 1, 0, 1), "homokinetic": (0, 0, 0, 1, 0, 1),
+    "planar": (1, 1, 0, 0, 0, 1), "unconstrained": (1, 1, 1, 1, 1, 1), "fully_constrained": (0,) * 6,
+}
+#: The freedom an actuated coupled pair drives (it has no flags of its own).
+COUPLED_FREEDOMS = {"screw": (0, 0, 0, 0, 0, 1), "gear": (0, 0, 0, 0, 0, 1),
+                    "rack_and_pinion": (1, 0, 0, 0, 0, 0)}
+
+#: Pair kinds with a range entity in each layout (1996 ``*_pair_range``, AP242 ``*_with_range``).
+RANGE_KINDS_1996 = frozenset({"revolute", "prismatic", "screw", "cylindrical", "spherical", "universal",
+                              "homokinetic", "planar", "gear", "rack_and_pinion"})
+RANGE_KINDS_AP242 = frozenset({"revolute", "prismatic", "screw", "cylindrical", "spherical", "universal",
+                               "planar", "gear", "rack_and_pinion", "point_on_planar_curve", "point_on_surface"})
+
+#: The mechanism's own instances, both layouts (a converted file holds one mechanism).
+MECHANISM_ENTITIES = frozenset((
+    "kinematic_structure", "kinematic_topology_structure", "kinematic_property_definition",
+    "kinematic_property_representation_relation", "kinematic_ground_representation", "mechanism",
+    "mechanism_base_placement", "mechanism_representation", "product_definition_kinematics",
+    "kinematic_property_mechanism_representation", "product_definition_relationship_kinematics",
+    "context_dependent_kinematic_link_representation",
+))
+#: AP242's loop structure (``p105 graph`` derives it).
+LOOP_ENTITIES = frozenset((
+    "kinematic_loop", "oriented_joint", "kinematic_topology_network_structure", "kinematic_topology_tree_structure",
+    "kinematic_topology_directed_structure", "kinematic_topology_substructure",
+))
+#: Items of the kinematics list that are plain geometry to a converter: kept unless orphaned.
+GEOMETRY_IN_KINEMATICS = frozenset(("su_parameters", "rotation_about_direction"))
+#: The link representation entities (1996, AP242, flexible).
+LINK_REPRESENTATION_ENTITIES = frozenset(("kinematic_link_representation", "rigid_link_representation",
+                                          "linear_flexible_link_representation"))
+
+
+# =========================================================================== end of writing tables

@@ -178,3 +178,40 @@ def surface_parameter_factors(mf: ModelFile, g, s: ContextScale) -> tuple:
 def on_curve(t_si: float, obj) -> float:
     """A basis-curve parameter (SI) as the parameter of the geometry object ``obj``."""
     return PairValueFormat._on_curve(t_si, obj)
+
+
+# =========================================================================== writing
+# The writing direction (part105.emit and part105.results write values, part105.convert copies
+# them): which entity a pair's value is, where its pair and name go in each layout, and the
+# value attributes in order. The numbers are converted by the caller's own rule for reals (the
+# emitter tidies them through its Builder, the results writer divides by the file unit), so
+# the bytes of both stay as they were.
+
+def value_entity(kind: str) -> str:
+    """The ``*_pair_value`` entity of a pair kind (a homokinetic pair's is universal_pair_value)."""
+    return "universal_pair_value" if kind == "homokinetic" else f"{kind}_pair_value"
+
+
+def value_arguments(layout: str, name: str, pair_ref, values) -> list:
+    """The arguments of a ``*_pair_value``: the pair, then the values (1996); the value's name,
+    the pair, then the values (AP242, where a pair value is a representation_item)."""
+    return [pair_ref, *values] if layout == "1996" else [name, pair_ref, *values]
+
+
+def scalar_values(units, q, angle, length) -> list:
+    """Scalar pair values ``q`` (SI, in value order) in the file: ``angle(x)`` for a plane angle,
+    ``length(x)`` for the rest (``units`` is ``PairType.value_units``)."""
+    return [angle(x) if u == "A" else length(x) for u, x in zip(units, q)]
+
+
+def value_attributes(mf: ModelFile, v) -> tuple:
+    """``(pair id, [raw value of each of the value entity's own attributes, in order])`` of pair
+    value ``#v``, in file units (what a converter copies into the other layout); the pair id is
+    None when ``applies_to_pair`` names none."""
+    inst = mf.pop.instance(v)
+    own = [inst.raw(n) for n, slot in enumerate(inst.layout.slots)
+           if slot.entity not in ("representation_item", "pair_value")]
+    return mf.ref_value(v, "applies_to_pair"), own
+
+
+__all__ += ["value_entity", "value_arguments", "scalar_values", "value_attributes"]

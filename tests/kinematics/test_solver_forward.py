@@ -17,7 +17,7 @@ from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.pairs import UnsupportedPairError
 from p105cli.kinematics.reader import read_mechanisms
 from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_y, rot_z, trans_x, trans_z
-from p105cli.kinematics.writer import _forward_poses
+from p105cli.part105.write_mechanism import _forward_poses
 from p105cli.step import read_any
 
 ROOT = Path(__file__).resolve().parents[2]

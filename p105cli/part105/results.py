@@ -1,31 +1,27 @@
-"""Analysis results of ``p105 solve`` written into the model.
+"""Analysis results and resulting paths into a model: the solved configurations of ``p105 solve``
+as Part 105 instances added to the input model, in its layout.
 
-Pure model building, no click. The motion *inputs* of ``solve`` (driven values,
-target poses) are read by :mod:`p105cli.formats.values` and
-:mod:`p105cli.formats.poses`.
+``add_results(doc, mech, Q, t, status, paths=..., pl=...)`` gives ``(document, notes)``;
+``resulting_path_request`` turns ``LINK[:FRAME]`` into a :class:`ResultingPath` (an error is a
+:class:`ResultingPathError`). Link placements come from the solver's forward kinematics
+(:func:`p105cli.kinematics.solver.forward`); the model's records are decoded once.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from p105cli.step.values import ref_id
-
-__all__ = ["MotionInputError", "add_results", "ResultingPath", "resulting_path_request", "controlling_pairs"]
-
-
-class MotionInputError(ValueError):
-    """A request the model cannot satisfy (``--resulting-path``); the message says why."""
+__all__ = ["WRITTEN_STATUSES", "add_results", "ResultingPath", "ResultingPathError", "controlling_pairs",
+           "resulting_path_request"]
 
 
-# --------------------------------------------------------------------------- analysis results in the model
+class ResultingPathError(ValueError):
+    """A resulting path was asked for that the mechanism cannot have (unknown link or frame, a
+    link no pair moves)."""
+
 
 #: Statuses whose values are a configuration of the mechanism (written into the model).
 WRITTEN_STATUSES = ("ok", "out_of_range", "singular", "branch_change")
-
-
-def _value_units(pair):
-    return ["A" if a else "L" for a in pair.type.angle_mask]
 
 
 def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
@@ -56,6 +52,8 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     exactly when a resulting path is there). Returns ``(document, notes)``."""
     from p105cli.step.jsonmodel import extended
 
+    from .pair_values import scalar_values, value_arguments, value_entity
+
     layout = "ap242" if mech.profile == "ap242" else "1996"
     lf, af = mech.units.length, mech.units.angle
     data = list(doc.records())
@@ -74,6 +72,13 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     if mech_id not in by_id:
         raise ValueError(f"mechanism {mech.name!r}: its mechanism instance is not known; cannot add results")
     slices = mech.value_slices
+    typed_model = []
+
+    def model_file():
+        """The model typed by its schema, over the records as read (built once, when needed)."""
+        if not typed_model:
+            typed_model.append(_model_file(doc, mech, data))
+        return typed_model[0]
 
     def value(p, q):
         if p.kind == "fully_constrained":
@@ -81,8 +86,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
         pair_ref = p.ids.get("pair")
         if pair_ref is None:
             raise ValueError(f"pair {p.name!r} has no instance in the model")
-        entity = "universal_pair_value" if p.kind == "homokinetic" else f"{p.kind}_pair_value"
-        conv = [float(x) / (af if u == "A" else lf) for u, x in zip(_value_units(p), q)]
+        conv = scalar_values(p.type.value_units, q, lambda x: float(x) / af, lambda x: float(x) / lf)
         if p.kind == "spherical":
             vals = [{"type": "YPR_ROTATION", "value": conv}]
         elif p.kind == "unconstrained":
@@ -93,8 +97,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
             vals = [new("axis2_placement_3d", [f"{p.name} value", o, z, x])]
         else:
             vals = conv
-        ref = {"ref": pair_ref}
-        return new(entity, [ref, *vals] if layout == "1996" else [p.name, ref, *vals])
+        return new(value_entity(p.kind), value_arguments(layout, p.name, {"ref": pair_ref}, vals))
 
     keep = [i for i, s in enumerate(status) if s in WRITTEN_STATUSES]
     if len(keep) < len(status):
@@ -125,7 +128,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
                                  else "DISCONTINUOUS_INTERPOLATION_TYPE"}])
                     for k, (s, tt) in enumerate(zip(states, ts))]
             seq = new("interpolated_configuration_sequence", [name, segs])
-            ctx = _parameter_context(by_id, by_id[mech_id]["args"][2], f"{mech.name} motion", added, next_id)
+            ctx = _parameter_context(model_file(), mech_id, f"{mech.name} motion", added, next_id)
             next_id += 1
             new("interpolated_configuration_representation", [name, [seq], ctx])
             new("kinematic_analysis_result", [{"ref": mech_id}, seq])
@@ -133,7 +136,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
                 from p105cli.kinematics.solver import forward, plan
                 pl = pl or plan(mech)
                 world = forward(pl, Q[keep])
-                for rp in _paths_ap242(doc, mech, paths, world, pl.link_index, ts, ctx, by_id, new, data):
+                for rp in _paths_ap242(model_file(), mech, paths, world, pl.link_index, ts, ctx, by_id, new, data):
                     new("kinematic_analysis_result", [{"ref": mech_id}, rp])
         else:
             # kinematic_analysis_result WR1 (1996) allows a defined interpolation only
@@ -148,8 +151,9 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
             results = [seq]
             if paths:
                 from p105cli.kinematics.solver import forward, plan
-                world = forward(pl or plan(mech), Q[keep])
-                results += _paths_1996(doc, mech, paths, world, (pl or plan(mech)).link_index, by_id, new, data)
+                pl = pl or plan(mech)
+                world = forward(pl, Q[keep])
+                results += _paths_1996(model_file(), mech, paths, world, pl.link_index, by_id, new, data)
             new("kinematic_analysis_result", [{"ref": mech_id}, results])
     elif states:
         notes.append("one configuration: written as a state without an interpolated sequence "
@@ -157,20 +161,21 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     return extended(doc, data, added), notes
 
 
-def _parameter_context(by_id, ctx_ref, name, added, new_id):
+def _parameter_context(mf, mech_id, name, added, new_id):
     """A copy of the mechanism's context that is also a geometric_representation_context_with_parameter
     (what an interpolated_configuration_representation needs), as a complex instance."""
-    rec = by_id.get(ctx_ref.get("ref") if isinstance(ctx_ref, dict) else None)
-    if rec is None:
+    ctx = mf.ref(mech_id, "context_of_items")
+    if ctx is None:
         raise ValueError("the mechanism representation has no context")
-    if "complex" in rec:
-        parts = [dict(p) for p in rec["complex"]]
-    else:
-        parts = [{"type": "geometric_representation_context", "args": rec["args"][2:3]},
-                 {"type": "representation_context", "args": rec["args"][:2]}]
-    for p in parts:
-        if p["type"] == "representation_context":
-            p["args"] = [name, *p["args"][1:]]
+    inst = mf.pop.instance(ctx)
+    if inst.is_complex:  # the same parts, named ``name``
+        parts = [{**p, "args": list(p["args"])} for p in inst.record["complex"]]
+        slot = inst.layout.slots[inst.layout.by_name["context_identifier"][0]]
+        parts[slot.part]["args"][slot.pos] = name
+    else:  # a geometric_representation_context as the parts of a complex instance
+        parts = [{"type": "geometric_representation_context",
+                  "args": [mf.get(ctx, "coordinate_space_dimension", None)]},
+                 {"type": "representation_context", "args": [name, mf.get(ctx, "context_type", None)]}]
     parts.append({"type": "geometric_representation_context_with_parameter", "args": [None]})
     parts.sort(key=lambda p: p["type"])
     added.append({"id": new_id, "complex": parts})
@@ -215,7 +220,7 @@ def resulting_path_request(mech, pl, spec: str, *, frame_matrix=None) -> Resulti
     if spec not in mech.link_names and ":" in spec:
         link, frame = spec.rsplit(":", 1)
     if link not in mech.link_names:
-        raise MotionInputError(f"--resulting-path {spec!r}: {link!r} is not a link of mechanism "
+        raise ResultingPathError(f"--resulting-path {spec!r}: {link!r} is not a link of mechanism "
                                f"{mech.name!r} (links: {', '.join(mech.link_names)})")
     frames = mech.link(link).frames
     if frame is None:
@@ -225,91 +230,82 @@ def resulting_path_request(mech, pl, spec: str, *, frame_matrix=None) -> Resulti
     elif frame_matrix is not None:
         T = frame_matrix
     else:
-        raise MotionInputError(f"--resulting-path {spec!r}: link {link!r} has no frame {frame!r} "
+        raise ResultingPathError(f"--resulting-path {spec!r}: link {link!r} has no frame {frame!r} "
                                f"(frames: {', '.join(frames) or 'none'})")
     pairs = controlling_pairs(mech, pl, link)
     if not pairs:
-        raise MotionInputError(f"--resulting-path {spec!r}: link {link!r} does not move (no pair moves it): "
+        raise ResultingPathError(f"--resulting-path {spec!r}: link {link!r} does not move (no pair moves it): "
                                "a resulting path needs at least one controlling joint")
     return ResultingPath(link, frame, T, pairs)
 
 
-def _length_of_context(pop, ctx_id, default: float) -> float:
-    from p105cli.kinematics.reader import LENGTH, context_units
+def _length_of_context(mf, ctx_id, default: float) -> float:
+    from p105cli.schema.units import LENGTH
     try:
-        f = context_units(pop, ctx_id).factor(LENGTH) if ctx_id is not None else None
+        f = mf.context_units(ctx_id).factor(LENGTH) if ctx_id is not None else None
     except Exception:  # noqa: BLE001 - a context without usable units: the mechanism's own
         f = None
     return f or default
 
 
-_ref_id = ref_id
+def _link_representation(mf, mech, link) -> int:
+    """The representation of ``link`` (as :func:`p105cli.part105.layout.link_reps` finds them),
+    preferring the one that holds the link's pair frames."""
+    from .layout import link_reps
 
-
-def _link_representation(pop, mech, link) -> int:
-    """The representation of ``link`` (a kinematic_link_representation), preferring the one that
-    holds the link's pair frames."""
     lid = mech.link(link).id
-    if lid is None or lid not in pop:
+    if lid is None or lid not in mf:
         raise ValueError(f"link {link!r} has no instance in the model; cannot tie a path to it")
-    if "kinematic_link_representation" in pop.instance(lid).types:
+    if mf.is_a(lid, "kinematic_link_representation"):
         return lid
-    reps = []
-    for inst in pop.usedin(lid):
-        if "kinematic_link_representation" in inst.types:
-            reps.append(inst.id)
-        elif "kinematic_link_representation_relation" in inst.types:
-            r = _ref_id(inst.get("geometric_aspects"))
-            if r is not None:
-                reps.append(r)
+    reps = link_reps(mf, lid)
     if not reps:
         raise ValueError(f"link {link!r} has no link representation; cannot tie a path to it")
     frames = {p.ids.get("frame_1") for p in mech.pairs if p.link1 == link} | \
              {p.ids.get("frame_2") for p in mech.pairs if p.link2 == link}
     for r in reps:
-        if frames & {_ref_id(v) for v in pop.instance(r).get("items") or []}:
+        if frames & set(mf.refs(r, "items")):
             return r
     return reps[0]
 
 
-def _frame_item(pop, mech, rp, rep_id, by_id, data, new):
+def _frame_item(mf, mech, rp, rep_id, by_id, data, new):
     """The placement item of link representation ``#rep_id`` that is ``rp``'s frame: the item of
     that name, else one at the same placement (axis2_placement_3d), else a new axis2_placement_3d
     added to the representation's items (a link frame that no item places yet)."""
-    from p105cli.kinematics.geometry_step import placement_from_instance
+    from .geometry import placement_from_instance
 
-    rep = pop.instance(rep_id)
-    items = [_ref_id(v) for v in rep.get("items") or []]
-    placements = [i for i in items if i in pop and "placement" in pop.instance(i).types]
+    placements = [i for i in mf.refs(rep_id, "items") if mf.is_a(i, "placement")]
     if rp.frame is not None:
         for i in placements:
-            n = pop.instance(i).get("name") or ""
+            n = mf.get(i, "name", None) or ""
             if rp.frame in (n, f"{n} #{i}", f"#{i}"):
                 return i
-    lf = _length_of_context(pop, _ref_id(rep.get("context_of_items")), mech.units.length)
+    lf = _length_of_context(mf, mf.ref(rep_id, "context_of_items"), mech.units.length)
     tol = 1e-9 * max(1.0, mech.size())
     for i in placements:
-        inst = pop.instance(i)
-        if "axis2_placement_3d" not in inst.types:
+        if not mf.is_a(i, "axis2_placement_3d"):
             continue
         try:
-            T = placement_from_instance(pop, inst, lf)
+            T = placement_from_instance(mf.pop, mf.pop.instance(i), lf)
         except Exception:  # noqa: BLE001 - an item that is no usable placement is not the frame
             continue
         if np.abs(T - rp.T_link_frame).max() <= tol:
             return i
     label = rp.frame or f"{rp.link} link frame"
     ref = _axis2(new, rp.T_link_frame, lf, label)
-    rec = by_id[rep_id]
+    rec = by_id[rep_id]  # as written so far (an earlier path may have added an item)
     k = next(n for n, r in enumerate(data) if r is rec)
+    lay = mf.pop.instance(rep_id).layout
+    slot = lay.slots[lay.by_name["items"][0]]
     if "complex" in rec:
         parts = [dict(p) for p in rec["complex"]]
-        for p in parts:
-            if p["type"] == "representation":
-                p["args"] = [p["args"][0], [*p["args"][1], ref], *p["args"][2:]]
+        args = parts[slot.part]["args"] = list(parts[slot.part]["args"])
         new_rec = {**rec, "complex": parts}
     else:
-        new_rec = {**rec, "args": [rec["args"][0], [*rec["args"][1], ref], *rec["args"][2:]]}
+        args = list(rec["args"])
+        new_rec = {**rec, "args": args}
+    args[slot.pos] = [*args[slot.pos], ref]
     data[k] = by_id[rep_id] = new_rec
     return ref["ref"]
 
@@ -331,17 +327,22 @@ def _label(rp) -> str:
     return rp.frame if rp.frame.startswith(rp.link) else f"{rp.link} {rp.frame}"
 
 
-def _path_population(doc, mech):
+def _model_file(doc, mech, data):
+    """The model, typed, over the records already decoded (``data``, as the model has them
+    before any is changed: none is decoded twice); lenient access."""
     from p105cli.schema.population import Population
-    return Population(doc, mech.profile)
+    from p105cli.schema.profiles import profile_for_header
+
+    from .model_file import ModelFile
+
+    pop = Population(list(data), mech.profile or profile_for_header(getattr(doc, "header", {}) or {}))
+    return ModelFile(pop, lenient=True)
 
 
-def _paths_ap242(doc, mech, paths, world, link_index, ts, ctx, by_id, new, data) -> list:
+def _paths_ap242(mf, mech, paths, world, link_index, ts, ctx, by_id, new, data) -> list:
     """AP242 resulting paths (refs): per request a kinematic_path_defined_by_nodes of the frame's
     world placements at the configurations, point to point, in the sequence's parameter context."""
-    pop = _path_population(doc, mech)
-    mech_rep = pop.instance(mech.ids["mechanism"])
-    lf = _length_of_context(pop, _ref_id(mech_rep.get("context_of_items")), mech.units.length)
+    lf = _length_of_context(mf, mf.ref(mech.ids["mechanism"], "context_of_items"), mech.units.length)
     out = []
     for rp in paths:
         poses = world[:, link_index[rp.link]] @ rp.T_link_frame
@@ -352,31 +353,30 @@ def _paths_ap242(doc, mech, paths, world, link_index, ts, ctx, by_id, new, data)
         kpath = new("kinematic_path_defined_by_nodes", [f"{label} resulting path", nodes, ts[0], start])
         joints = [{"ref": mech.pair(n).ids["joint"]} for n in rp.pairs]
         path = new("resulting_path", [f"{label} resulting path", [kpath], ctx, joints])
-        rep_id = _link_representation(pop, mech, rp.link)
-        frame = _frame_item(pop, mech, rp, rep_id, by_id, data, new)
+        rep_id = _link_representation(mf, mech, rp.link)
+        frame = _frame_item(mf, mech, rp, rep_id, by_id, data, new)
         lmt = new("link_motion_transformation", [f"{label} motion", None, {"ref": frame}, kpath])
         new("link_motion_relationship", [f"{label} motion", None, {"ref": rep_id}, path, lmt])
         out.append(path)
     return out
 
 
-def _paths_1996(doc, mech, paths, world, link_index, by_id, new, data=None) -> list:
+def _paths_1996(mf, mech, paths, world, link_index, by_id, new, data) -> list:
     """1996 resulting paths (refs): a motion_link_relationship subtype from a founded_kinematic_path
     (a bare kinematic_path: AP214 has no path geometry) in the world context to the link frame."""
-    pop = _path_population(doc, mech)
     world_ctx = None
     bp = mech.ids.get("base_placement")
-    if bp in pop:
-        ground = _ref_id(pop.instance(bp).get("rep_1"))
-        if ground in pop:
-            world_ctx = _ref_id(pop.instance(ground).get("context_of_items"))
+    if bp in mf:
+        ground = mf.ref(bp, "rep_1")
+        if ground in mf:
+            world_ctx = mf.ref(ground, "context_of_items")
     out = []
     for rp in paths:
-        rep_id = _link_representation(pop, mech, rp.link)
+        rep_id = _link_representation(mf, mech, rp.link)
         if world_ctx is None:  # no base placement: the world is the base link's frame
-            world_ctx = _ref_id(pop.instance(_link_representation(pop, mech, mech.base)).get("context_of_items"))
+            world_ctx = mf.ref(_link_representation(mf, mech, mech.base), "context_of_items")
         label = _label(rp)
-        frame = _frame_item(pop, mech, rp, rep_id, by_id, data, new)
+        frame = _frame_item(mf, mech, rp, rep_id, by_id, data, new)
         kpath = new("kinematic_path", [f"{label} resulting path"])
         founded = new("founded_kinematic_path", [f"{label} resulting path", [kpath], {"ref": world_ctx}])
         joints = [{"ref": mech.pair(n).ids["joint"]} for n in rp.pairs]
