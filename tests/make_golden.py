@@ -326,11 +326,7 @@ def _external_cases() -> list[Case]:
 
 
 #: Cases that end with an internal error (exit 3) today: bugs, left out until fixed.
-INTERNAL_ERRORS = {
-    # KeyError: 'B': a revolute pair written as the equivalent low_order_kinematic_pair
-    "ext-export-schema-ap214--defects-four_bar_low_order_pair",
-    "ext-export-schema-ap242--defects-four_bar_low_order_pair",
-}
+INTERNAL_ERRORS: set[str] = set()
 
 
 def cases() -> list[Case]:

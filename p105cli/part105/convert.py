@@ -625,6 +625,9 @@ class Conversion:
             if configs:
                 found.append((name, configs, used, holders))
         for name, configs, used, holders in found:
+            # the values of a pair left out (a kind not written, reported) go with it
+            configs = [(None if vals is None else [v for v in vals if v[0] in k.pairs], t, interp)
+                       for vals, t, interp in configs]
             ctx = None
             if k.layout == "ap242":
                 ctx = self._motion_context(k, holders)
