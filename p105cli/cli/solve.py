@@ -257,21 +257,20 @@ def _start(o, doc, mech, prog):
 
 def _check_pair_parameters(o, mech, pl):
     """A pair whose motion refuses its parameters or initial values (a rule of the model
-    broken, e.g. a universal pair's skew angle against WR1) cannot be solved: malformed
-    input naming the pair (exit 2), before the solver meets it."""
+    broken, e.g. a universal pair's skew angle against WR1), or has no motion here (a helical
+    gear), cannot be solved: an input error naming the pair (exit 2), before the solver
+    meets it (every pair's motion is evaluated in the analysis)."""
     import numpy as np
     q0 = np.asarray(mech.initial_vector(), dtype=float)
     for k, kind in enumerate(pl.types):
         try:
             kind.motion(q0[pl.slices[k]], **pl.params[k])
-        except ValueError as err:
+        except (ValueError, NotImplementedError) as err:  # NotImplementedError: UnsupportedPairError
             name = pl.pair_names[k]
             iid = (getattr(mech.pair(name), "ids", None) or {}).get("pair")
             where = f"#{iid}: " if iid is not None else ""
             raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {where}mechanism {mech.name!r}: "
                              f"pair {name!r}: {err}") from None
-        except NotImplementedError:  # no closed-form motion (higher pairs): the solver's own business
-            pass
 
 
 def _motion(o, mech, prog):

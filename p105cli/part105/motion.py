@@ -115,8 +115,7 @@ def read_paths(doc, profile: str | None = None, *, pop=None) -> MotionReadResult
         except (TypeError, KeyError, ValueError) as err:
             raise _error(pid, f"placement_start / t_start: {err}") from None
         segments = []
-        for v in inst.get("segments") or []:
-            sid = _ref(v)
+        for sid in mf.refs(pid, "segments"):  # checked: a dangling segment is named
             seg = pop.instance(sid)
             kind = next((k for name, k in _SEGMENT_KIND.items() if name in seg.types), None)
             if kind is None:

@@ -108,3 +108,37 @@ def test_a_sequence_holding_values_of_a_pair_left_out_is_converted_without_them(
     assert "INTERPOLATED_CONFIGURATION_SEQUENCE" in r.stdout.decode()
     v = p105("validate", out)
     assert v.returncode == 0, v.stdout.decode()
+
+
+@pytest.mark.skipif(not (SHARED / "external" / "crashes" / "D06.stp").is_file(), reason="no shared files")
+def test_a_pair_without_a_motion_here_is_an_input_error_for_solve(p105):
+    # was UnsupportedPairError (exit 3) from the loop closure: a gear pair with a helical angle
+    path = SHARED / "external" / "crashes" / "D06.stp"
+    r = p105("solve", "--to", "jsonl", path)
+    assert r.returncode == 2
+    assert _no_crash(r).splitlines()[-1].startswith(
+        f"p105: error: {path}: #210: mechanism 'gear_train': pair 'mesh 1-2': gear pair: helical_angle = ")
+
+
+@pytest.mark.parametrize("command", [["solve"], ["export", "--schema", "ap214"], ["export", "--schema", "ap242"]],
+                         ids=" ".join)
+def test_a_unit_factor_whose_inverse_overflows_is_named(p105, tmp_path, command):
+    # shared crashes/D09: a degree of 5e-324 rad; values divided by it were inf/nan, and
+    # writing them was an internal error (exit 3)
+    path = _edited(tmp_path, "four_bar_ap242", "PLANE_ANGLE_MEASURE(0.0174532925199433)",
+                   "PLANE_ANGLE_MEASURE(5.E-324)")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert "cannot convert plane-angle values (it or its inverse is beyond the range of reals)" in _no_crash(r)
+    v = p105("validate", path)
+    assert v.returncode == 1 and "error[KIN-UNITS] conversion-based unit" in v.stdout.decode()
+
+
+@pytest.mark.parametrize("command", [["solve", "--program"], ["interpolate"]], ids=" ".join)
+def test_a_dangling_path_segment_is_named(p105, tmp_path, command):
+    # was KeyError: 999 (exit 3): the path's segments were looked up unchecked
+    path = _edited(tmp_path, "gear_train_ap242", "('gear_3 marker path',(#263,#268),", "('gear_3 marker path',(#263,#999),")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert (f"{path}: #269: segments of kinematic_path_defined_by_nodes refers to #999, which is not in the "
+            "file") in _no_crash(r)
