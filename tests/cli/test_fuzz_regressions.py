@@ -80,10 +80,13 @@ def test_the_shared_d08_is_refused_cleanly(p105):
 
 
 @pytest.mark.skipif(not (SHARED / "external" / "crashes" / "D05.stp").is_file(), reason="no shared files")
-def test_a_pair_parameter_its_motion_refuses_is_malformed_input_for_solve(p105):
-    # was ValueError (exit 3) from the universal pair's motion: its skew angle breaks WR1;
-    # graph, lenient, says the pair has no motion and goes on
-    path = SHARED / "external" / "crashes" / "D05.stp"
+def test_a_pair_parameter_its_motion_refuses_is_malformed_input_for_solve(p105, tmp_path):
+    # was ValueError (exit 3) from the universal pair's motion: its skew angle (2 rad) breaks
+    # WR1; graph, lenient, says the pair has no motion and goes on
+    d05 = (SHARED / "external" / "crashes" / "D05.stp").read_text()
+    assert "UNIVERSAL_PAIR(1.E300)" in d05
+    path = tmp_path / "skew.stp"
+    path.write_text(d05.replace("UNIVERSAL_PAIR(1.E300)", "UNIVERSAL_PAIR(2.)"))
     r = p105("solve", "--to", "jsonl", path)
     assert r.returncode == 2
     assert _no_crash(r).splitlines()[-1] == (
@@ -91,6 +94,9 @@ def test_a_pair_parameter_its_motion_refuses_is_malformed_input_for_solve(p105):
         "cos(skew_angle) > 0 (the axes' offset from a right angle must be acute)")
     g = p105("graph", path)
     assert g.returncode == 0 and "pair 'J2' (universal): no motion available" in g.stderr.decode()
+    # the shared file itself: a skew angle of 1e300 is beyond what is computed with
+    r = p105("solve", "--to", "jsonl", SHARED / "external" / "crashes" / "D05.stp")
+    assert r.returncode == 2 and "#142: input_skew_angle of" in _no_crash(r)
 
 
 @pytest.mark.skipif(not (SHARED / "external" / "defects" / "four_bar_low_order_pair.stp").is_file(),
@@ -142,3 +148,15 @@ def test_a_dangling_path_segment_is_named(p105, tmp_path, command):
     assert r.returncode == 2
     assert (f"{path}: #269: segments of kinematic_path_defined_by_nodes refers to #999, which is not in the "
             "file") in _no_crash(r)
+
+
+@pytest.mark.parametrize("command", [["graph"], ["solve"], ["export", "--schema", "ap214"]], ids=" ".join)
+def test_a_coordinate_beyond_what_can_be_computed_with_is_named(p105, tmp_path, command):
+    # shared crashes/D02, D03, D21: a point of a pair frame at 1e308 mm; the analysis overflowed
+    # (LinAlgError "SVD did not converge", inf in JSON: exit 3; or Infinity written, exit 0)
+    path = _edited(tmp_path, "four_bar_ap242", "#138=CARTESIAN_POINT('',(0.,0.,0.));",
+                   "#138=CARTESIAN_POINT('',(1.E308,0.,0.));")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert ("#138: coordinates of cartesian_point is [1e+308, 0.0, 0.0], beyond the magnitudes p105 "
+            "computes with (1e+100)") in _no_crash(r)
