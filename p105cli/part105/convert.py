@@ -590,8 +590,8 @@ class Conversion:
     def _neutral(self, configs, initial_vals, pair_names, used):
         out = []
         for vids, t, interp in configs:
-            if not isinstance(t, (int, float)):
-                return None, []
+            if not isinstance(t, (int, float)) or (vids is not None and None in vids):
+                return None, []  # a time or a pair value that is no number / no reference: not converted
             if vids is None or (initial_vals is not None and sorted(vids) == sorted(initial_vals)):
                 out.append((None, float(t), interp))
                 continue

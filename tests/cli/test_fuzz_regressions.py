@@ -160,3 +160,17 @@ def test_a_coordinate_beyond_what_can_be_computed_with_is_named(p105, tmp_path, 
     assert r.returncode == 2
     assert ("#138: coordinates of cartesian_point is [1e+308, 0.0, 0.0], beyond the magnitudes p105 "
             "computes with (1e+100)") in _no_crash(r)
+
+
+@pytest.mark.parametrize("schema", ["ap214", "ap242"])
+def test_a_configuration_with_a_number_among_its_pair_values_is_left_out_of_the_conversion(p105, tmp_path,
+                                                                                            schema):
+    # shared crashes/D10j, D11c: was TypeError (int < None, exit 3) comparing the value lists
+    path = _edited(tmp_path, "four_bar_ap214", "#217=CONFIGURATION_DEFINITION((#213,",
+                   "#217=CONFIGURATION_DEFINITION((7,")
+    r = p105("export", "--schema", schema, path)
+    assert r.returncode == 0
+    err = _no_crash(r)
+    if schema == "ap242":  # (ap214 to ap214 keeps the file's own sequence as it is)
+        assert f"{path}: #217: configuration_definition does not exist in ap242; left out" in err
+        assert "INTERPOLATED_CONFIGURATION_SEQUENCE" not in r.stdout.decode()
