@@ -650,6 +650,9 @@ class Conversion:
             return k.world_ctx
         rec = self.replaced(ctx, {"context_identifier": f"{self.mech.name} motion"})
         parts = [(part["type"], part["args"]) for part in rec["complex"]]
+        twice = sorted({t for t, _ in parts if [u for u, _ in parts].count(t) > 1})
+        if twice:  # a malformed complex instance is not copied into a new one
+            raise _model_error(f"complex instance names {', '.join(twice)} more than once", ctx)
         parts.append(("geometric_representation_context_with_parameter", [None]))
         return k.b.add_complex(parts)
 

@@ -174,3 +174,15 @@ def test_a_configuration_with_a_number_among_its_pair_values_is_left_out_of_the_
     if schema == "ap242":  # (ap214 to ap214 keeps the file's own sequence as it is)
         assert f"{path}: #217: configuration_definition does not exist in ap242; left out" in err
         assert "INTERPOLATED_CONFIGURATION_SEQUENCE" not in r.stdout.decode()
+
+
+def test_a_context_naming_a_partial_entity_twice_is_named_by_export(p105, tmp_path):
+    # shared crashes/D10k: was ValueError from the builder (exit 3) copying the world context
+    # into the motion context; the error names the file too (it said <input>)
+    path = _edited(tmp_path, "four_bar_ap214", "#7=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))",
+                   "#7=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))"
+                   "GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))")
+    r = p105("export", "--schema", "ap242", path)
+    assert r.returncode == 2
+    assert _no_crash(r).splitlines()[-1] == (
+        f"p105: error: {path}: #7: complex instance names global_uncertainty_assigned_context more than once")
