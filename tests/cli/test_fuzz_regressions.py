@@ -143,7 +143,8 @@ def test_a_unit_factor_whose_inverse_overflows_is_named(p105, tmp_path, command)
 @pytest.mark.parametrize("command", [["solve", "--program"], ["interpolate"]], ids=" ".join)
 def test_a_dangling_path_segment_is_named(p105, tmp_path, command):
     # was KeyError: 999 (exit 3): the path's segments were looked up unchecked
-    path = _edited(tmp_path, "gear_train_ap242", "('gear_3 marker path',(#263,#268),", "('gear_3 marker path',(#263,#999),")
+    path = _edited(tmp_path, "gear_train_ap242", "('gear_3 marker path',(#263,#268),",
+                   "('gear_3 marker path',(#263,#999),")
     r = p105(*command, path)
     assert r.returncode == 2
     assert (f"{path}: #269: segments of kinematic_path_defined_by_nodes refers to #999, which is not in the "
@@ -179,9 +180,8 @@ def test_a_configuration_with_a_number_among_its_pair_values_is_left_out_of_the_
 def test_a_context_naming_a_partial_entity_twice_is_named_by_export(p105, tmp_path):
     # shared crashes/D10k: was ValueError from the builder (exit 3) copying the world context
     # into the motion context; the error names the file too (it said <input>)
-    path = _edited(tmp_path, "four_bar_ap214", "#7=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))",
-                   "#7=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))"
-                   "GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))")
+    head = "#7=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))"
+    path = _edited(tmp_path, "four_bar_ap214", head, head + "GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#6))")
     r = p105("export", "--schema", "ap242", path)
     assert r.returncode == 2
     assert _no_crash(r).splitlines()[-1] == (
