@@ -186,3 +186,16 @@ def test_a_context_naming_a_partial_entity_twice_is_named_by_export(p105, tmp_pa
     assert r.returncode == 2
     assert _no_crash(r).splitlines()[-1] == (
         f"p105: error: {path}: #7: complex instance names global_uncertainty_assigned_context more than once")
+
+
+@pytest.mark.skipif(not (SHARED / "external" / "defects" / "four_bar_low_order_pair.stp").is_file(),
+                    reason="no shared files")
+@pytest.mark.parametrize("drive", [["--set", "A=0.5"], ["--set", "C=0.5"], ["--program", "--count", "3"]],
+                         ids=" ".join)
+def test_a_low_order_pair_in_a_loop_solves_with_its_locked_values_at_roundoff(p105, drive):
+    # was ValueError (exit 3): the loop closure left 2.8e-19 on a locked translation of pair B
+    r = p105("solve", *drive, "--no-timings", "--to", "jsonl",
+             SHARED / "external" / "defects" / "four_bar_low_order_pair.stp")
+    assert r.returncode == 0, _no_crash(r)
+    summary = json.loads(r.stdout.splitlines()[-1])
+    assert summary["type"] == "summary" and set(summary["status"]) == {"ok"}
