@@ -453,4 +453,12 @@ class ModelFile:
 
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
-        return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))
+        open_ = self._cache.setdefault("transformations being placed", set())
+        if i in open_:  # a transform item that is (or leads back to) this transformation
+            raise model_error(i, f"{self.label(i)} refers back to itself through its transform items: "
+                              "it places nothing")
+        open_.add(i)
+        try:
+            return self.placement(b, scale2) @ pl.inverse(self.placement(a, scale1))
+        finally:
+            open_.discard(i)

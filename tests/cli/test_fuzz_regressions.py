@@ -199,3 +199,15 @@ def test_a_low_order_pair_in_a_loop_solves_with_its_locked_values_at_roundoff(p1
     assert r.returncode == 0, _no_crash(r)
     summary = json.loads(r.stdout.splitlines()[-1])
     assert summary["type"] == "summary" and set(summary["status"]) == {"ok"}
+
+
+@pytest.mark.parametrize("command", [["graph"], ["solve"], ["export", "--schema", "ap214"]], ids=" ".join)
+def test_a_pair_whose_transform_item_is_itself_is_named(p105, tmp_path, command):
+    # a fuzz variant of shared crashes/D07: RecursionError (exit 3) placing the pair's frames
+    path = _edited(tmp_path, "four_bar_ap242", "#183=REVOLUTE_PAIR('B',*,'crank-coupler pin',#149,",
+                   "#183=REVOLUTE_PAIR('B',*,'crank-coupler pin',#183,")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert _no_crash(r).splitlines()[-1] == (
+        f"p105: error: {path}: #183: revolute_pair refers back to itself through its transform items: it places "
+        "nothing")
