@@ -10,7 +10,7 @@ STAMP   = $(VENV)/.installed
 SHARED ?= ../shared
 FUZZ_SECONDS ?= 120
 
-.PHONY: all install demo test test-all fuzz man bench bench-parse bench-validate bench-graph bench-solve \
+.PHONY: all install demo test test-all fuzz fuzz-commands man bench bench-parse bench-validate bench-graph bench-solve \
         bench-cable clean
 
 all: test
@@ -64,6 +64,10 @@ test-all: $(STAMP)
 
 fuzz: $(STAMP)
 	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) $(PY) tests/fuzz_reader.py
+
+# Every command on mutated corpus, example and ../shared/external files: exit 0, 1 or 2, never 3.
+fuzz-commands: $(STAMP)
+	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) $(PY) tests/fuzz_commands.py
 
 man: $(STAMP)
 	$(PY) -m p105cli.manpages man

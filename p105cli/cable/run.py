@@ -35,9 +35,12 @@ def load_scene(path) -> dict:
         raise SceneInputError(f"{path}: {kind} nested too deeply") from None
 
 
-def run(scene, scene_path, keypoints, motion, out, pictures=(None, None), warn=None) -> bool:
+def run(scene, scene_path, keypoints, motion, out, pictures=(None, None), warn=None,
+        timings: bool = True) -> bool:
     """Run the scene's effects on the motion (``[(t, {link: 4x4})]`` or None); its records as
     JSON Lines on ``out``, and the pictures ``(plot, animation)`` asked for. False on findings.
+    ``timings`` False: no record says how long it took (``time_s`` left out), so the same
+    input gives the same bytes.
 
     ``keypoints`` is a file name (relative to the working directory); ``warn(message)``
     receives remarks (nothing to draw)."""
@@ -60,6 +63,8 @@ def run(scene, scene_path, keypoints, motion, out, pictures=(None, None), warn=N
                 ok = False
             if kept is not None and rec.get("type") == "cable_state":
                 kept.append(rec)
+            if not timings:
+                rec.pop("time_s", None)
             out.write(json.dumps(rec, separators=(",", ":"), default=json_default) + "\n")
     except workflow.KeypointError as err:   # names its own file
         raise SceneInputError(str(err)) from None

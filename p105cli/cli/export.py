@@ -22,7 +22,8 @@ def _convert(doc, schema: str, occt_compat: bool):
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
-    out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
+    with naming_source(doc):  # the conversion reads the source too: its errors name the file
+        out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
     for message in diagnostics:
         diag("warning", f"{doc.source}: {message}")
     return out

@@ -71,17 +71,26 @@ def nesting_guard(source: str):
         raise err from None
 
 
-def parse_document(text: str, source: str):
-    """A Part 21 or p105/1 JSON model from text (sniffed); StepError on bad input."""
-    from p105cli.step import read_any
+def parse_document(text: str, source: str, *, decodes_all: bool = False):
+    """A Part 21 or p105/1 JSON model from text (sniffed); StepError on bad input.
+
+    Every instance of a Part 21 file is decoded once here, so that a syntax error anywhere
+    in the file is reported as FILE:LINE:COL (exit 2) by every command, before any analysis
+    (which decodes only the instances it reads). ``decodes_all``: the caller decodes every
+    instance in file order itself (``parse``, ``validate``) and reports the same error."""
+    from p105cli.step import StepFile, read_any
     with nesting_guard(source):
-        return read_any(text, source)
+        doc = read_any(text, source)
+        if not decodes_all and isinstance(doc, StepFile):
+            doc.check()
+    return doc
 
 
-def load_document(path: str | None):
-    """Read a model from a Part 21 or JSON input (sniffed); StepError on bad input."""
+def load_document(path: str | None, *, decodes_all: bool = False):
+    """Read a model from a Part 21 or JSON input (sniffed); StepError on bad input
+    (a syntax error in any instance too, see :func:`parse_document`)."""
     text, source = read_text(path)
-    return parse_document(text, source)
+    return parse_document(text, source, decodes_all=decodes_all)
 
 
 @contextlib.contextmanager

@@ -20,7 +20,7 @@ def parse(input, output, stream):
     Every instance is kept, kinematic or not; `p105 export --to p21` gives
     the Part 21 file back. Syntax errors are reported as FILE:LINE:COL.
     """
-    doc = load_document(input)
+    doc = load_document(input, decodes_all=True)  # emit_json reports a syntax error
     with open_output(output, (input,)) as out:
         emit_json(doc, out, stream)
     report_warnings(doc)

@@ -127,7 +127,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
             if o.scene_dict is not None and not run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
-                                                           o.pictures):
+                                                           o.pictures, o.timings):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
@@ -164,6 +164,7 @@ def _start(o, doc, mech, prog):
     from p105cli.motion.analysis import analyse_motion
     try:
         pl = solver.plan(mech)
+        _check_pair_parameters(o, mech, pl)
         if o.want is not None and prog is not None and prog[0] == "path":
             raise click.UsageError(f"--branch {o.branch}: the model's program is a prescribed path (inverse "
                                    "analysis): the assembly branch is chosen in forward analysis")
@@ -179,6 +180,24 @@ def _start(o, doc, mech, prog):
     except solver.SolveError as err:
         raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
     return pl, motion, itertools.chain([first], blocks)
+
+
+def _check_pair_parameters(o, mech, pl):
+    """A pair whose motion refuses its parameters or initial values (a rule of the model
+    broken, e.g. a universal pair's skew angle against WR1), or has no motion here (a helical
+    gear), cannot be solved: an input error naming the pair (exit 2), before the solver
+    meets it (every pair's motion is evaluated in the analysis)."""
+    import numpy as np
+    q0 = np.asarray(mech.initial_vector(), dtype=float)
+    for k, kind in enumerate(pl.types):
+        try:
+            kind.motion(q0[pl.slices[k]], **pl.params[k])
+        except (ValueError, NotImplementedError) as err:  # NotImplementedError: UnsupportedPairError
+            name = pl.pair_names[k]
+            iid = (getattr(mech.pair(name), "ids", None) or {}).get("pair")
+            where = f"#{iid}: " if iid is not None else ""
+            raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {where}mechanism {mech.name!r}: "
+                             f"pair {name!r}: {err}") from None
 
 
 def _motion(o, mech, prog):

@@ -16,7 +16,7 @@ def scene_only(o):
     if o.values is not None or o.sets or o.sweeps or o.path is not None:
         raise click.UsageError("--values, --set, --sweep and --path need a MODEL")
     with open_output(o.output, (o.scene, o.keypoints)) as out:
-        ok = run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures)
+        ok = run_scene(o.scene_dict, o.scene, o.keypoints, None, out, o.pictures, o.timings)
     if not ok:
         raise click.exceptions.Exit(ExitCode.FINDINGS)
 
@@ -41,10 +41,11 @@ def load_scene(path):
         raise InputError(str(err)) from None
 
 
-def run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None)) -> bool:
+def run_scene(scene, scene_path, keypoints, motion, out, pictures=(None, None), timings=True) -> bool:
     """The scene's effects on the motion as JSON Lines records; False on findings."""
     from p105cli.cable import run
     try:
-        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m))
+        return run.run(scene, scene_path, keypoints, motion, out, pictures, warn=lambda m: diag("warning", m),
+                       timings=timings)
     except run.SceneInputError as err:
         raise InputError(str(err)) from None

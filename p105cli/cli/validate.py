@@ -22,7 +22,7 @@ def _check_one(path: str, schema: str | None, timings: bool):
 
     raw, source = read_input_bytes(path)
     try:
-        doc = parse_document(decode(raw), source)
+        doc = parse_document(decode(raw), source, decodes_all=True)  # rules report P21-SYNTAX
         try:
             return validate_document(doc, source, schema, timings), raw
         except UnknownSchemaError:

@@ -697,9 +697,14 @@ def _rc_j(q, p, shape):
 _FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
 
 
+#: A locked value of a low order pair within this of 0 is 0: the solver's steps leave roundoff
+#: (1e-19) on it through the pseudo-inverse, though its Jacobian column is zero.
+_LOCKED_ROUNDOFF = 1e-12
+
+
 def _low_check(q, p):
     for i, f in enumerate(_FLAGS):
-        if not p[f] and np.any(q[i] != 0.0):
+        if not p[f] and np.any(np.abs(q[i]) > _LOCKED_ROUNDOFF):
             raise ValueError(f"low order kinematic pair: {f} = FALSE locks value {i + 1} "
                              f"({LOW_ORDER.value_names[i]}), which must be 0")
 

@@ -597,8 +597,8 @@ class Conversion:
     def _neutral(self, configs, initial_vals, pair_names, used):
         out = []
         for vids, t, interp in configs:
-            if not isinstance(t, (int, float)):
-                return None, []
+            if not isinstance(t, (int, float)) or (vids is not None and None in vids):
+                return None, []  # a time or a pair value that is no number / no reference: not converted
             if vids is None or (initial_vals is not None and sorted(vids) == sorted(initial_vals)):
                 out.append((None, float(t), interp))
                 continue
@@ -632,6 +632,9 @@ class Conversion:
             if configs:
                 found.append((name, configs, used, holders))
         for name, configs, used, holders in found:
+            # the values of a pair left out (a kind not written, reported) go with it
+            configs = [(None if vals is None else [v for v in vals if v[0] in k.pairs], t, interp)
+                       for vals, t, interp in configs]
             ctx = None
             if k.layout == "ap242":
                 ctx = self._motion_context(k, holders)
@@ -654,6 +657,9 @@ class Conversion:
             return k.world_ctx
         rec = self.replaced(ctx, {"context_identifier": f"{self.mech.name} motion"})
         parts = [(part["type"], part["args"]) for part in rec["complex"]]
+        twice = sorted({t for t, _ in parts if [u for u, _ in parts].count(t) > 1})
+        if twice:  # a malformed complex instance is not copied into a new one
+            raise _model_error(f"complex instance names {', '.join(twice)} more than once", ctx)
         parts.append(("geometric_representation_context_with_parameter", [None]))
         return k.b.add_complex(parts)
 

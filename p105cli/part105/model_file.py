@@ -40,6 +40,15 @@ __all__ = ["ModelFile", "ContextScale", "MISSING", "model_error", "open_populati
 #: What lenient ``get`` returns for an attribute an instance does not have.
 MISSING = object()
 
+#: The largest magnitude of a number the model readers accept: the analysis multiplies
+#: lengths, angles and their derivatives (norms, Jacobians, products of placements), which
+#: must stay finite; no mechanism needs anything near it (the observable universe is 1e26 m).
+MAX_MAGNITUDE = 1e100
+
+
+def _too_large(x) -> bool:
+    return abs(x) > MAX_MAGNITUDE
+
 
 def model_error(iid, message: str) -> ModelError:
     """A ModelError whose message starts with ``#iid`` (``err.instance_id`` holds it)."""
@@ -337,6 +346,9 @@ class ModelFile:
             if self.is_lenient:
                 return None
             raise model_error(i, f"{attr} of {self.label(i)} is {v!r}, not a finite number")
+        if _too_large(x) and not self.is_lenient:
+            raise model_error(i, f"{attr} of {self.label(i)} is {x!r}, beyond the magnitudes p105 computes "
+                              f"with ({MAX_MAGNITUDE:g})")
         return x
 
     def string(self, i, *attrs) -> str:
@@ -380,6 +392,9 @@ class ModelFile:
         out = [_num(x) for x in v]
         if None in out or not all(math.isfinite(x) for x in out):
             raise model_error(i, f"{attr} of {self.label(i)} is {v!r}, not a list of finite numbers")
+        if any(map(_too_large, out)):
+            raise model_error(i, f"{attr} of {self.label(i)} is {v!r}, beyond the magnitudes p105 computes "
+                              f"with ({MAX_MAGNITUDE:g})")
         return out
 
     def direction(self, i, attr) -> Optional[list]:
@@ -454,4 +469,12 @@ class ModelFile:
 
         a = self.ref(i, "transform_item_1")
         b = self.ref(i, "transform_item_2")
-        return self.placement(b, scale2) @ spatial.inverse(self.placement(a, scale1))
+        open_ = self._cache.setdefault("transformations being placed", set())
+        if i in open_:  # a transform item that is (or leads back to) this transformation
+            raise model_error(i, f"{self.label(i)} refers back to itself through its transform items: "
+                              "it places nothing")
+        open_.add(i)
+        try:
+            return self.placement(b, scale2) @ spatial.inverse(self.placement(a, scale1))
+        finally:
+            open_.discard(i)

@@ -116,8 +116,7 @@ def read_paths(doc, profile: str | None = None) -> MotionReadResult:
         except (TypeError, KeyError, ValueError) as err:
             raise _error(pid, f"placement_start / t_start: {err}") from None
         segments = []
-        for v in inst.get("segments") or []:
-            sid = _ref(v)
+        for sid in mf.refs(pid, "segments"):  # checked: a dangling segment is named
             seg = pop.instance(sid)
             kind = next((k for name, k in _SEGMENT_KIND.items() if name in seg.types), None)
             if kind is None:
@@ -200,28 +199,31 @@ def read_configuration_sequences(doc, profile: str | None = None):
     values = PairValueReader(mf)
     kinds = values.kinds
     out, skipped = [], []
+    def at(i, attr):  # the instance #i.attr refers to; a ModelError naming #i if there is none
+        return pop.instance(mf.ref(i, attr))
+
     for sid in seq_ids:
         seq = pop.instance(sid)
         nodes = {}
         if "segments" in seq.explicit_names():  # AP242: segments (state, t_parameter, interpolation)
-            for v in seq.get("segments") or []:
-                seg = pop.instance(_ref(v))
-                state = pop.instance(_ref(seg.get("state")))
-                t = _num(seg.get("t_parameter"))
-                nodes[t] = ConfigurationNode(t, values.values([_ref(x) for x in state.get("items") or []]),
+            for gid in mf.refs(sid, "segments"):
+                seg = pop.instance(gid)
+                state = at(gid, "state")
+                t = mf.number(gid, "t_parameter")
+                nodes[t] = ConfigurationNode(t, values.values(mf.refs(state.id, "items")),
                                              _interpolation(seg), state.get("name") or "", state.id)
             name = seq.get("name") or f"#{sid}"
             closed = bool(nodes) and list(nodes.values())[-1].interpolation != "discontinuous"
         else:  # 1996: a set of configuration_interpolation(previous, next, interpolation)
             laws = {}
-            for v in seq.get("interpolation") or []:
-                ci = pop.instance(_ref(v))
+            for cid in mf.refs(sid, "interpolation"):
+                ci = pop.instance(cid)
                 for attr in ("previous_configuration_definition", "next_configuration_definition"):
-                    cd = pop.instance(_ref(ci.get(attr)))
-                    t = _num(cd.get("t_parameter"))
+                    cd = at(cid, attr)
+                    t = mf.number(cd.id, "t_parameter")
                     if t not in nodes:
-                        nodes[t] = (values.values([_ref(x) for x in cd.get("pair_values") or []]), cd.id)
-                prev_t = _num(pop.instance(_ref(ci.get("previous_configuration_definition"))).get("t_parameter"))
+                        nodes[t] = (values.values(mf.refs(cd.id, "pair_values")), cd.id)
+                prev_t = mf.number(at(cid, "previous_configuration_definition").id, "t_parameter")
                 laws[prev_t] = _interpolation(ci)
             last = max(nodes) if nodes else None
             nodes = {t: ConfigurationNode(t, vals, laws.get(t, "discontinuous" if t == last else "undefined"),

@@ -57,7 +57,7 @@ def kinematic_closure(pop) -> list[int]:
     todo = list(seeds)
     while todo:
         for r in record_refs(pop.instance(todo.pop()).record):
-            if r not in seen and pop.types_of(r) is not None:
+            if r not in seen and r in pop:  # a dangling reference leads nowhere
                 seen.add(r)
                 todo.append(r)
     return sorted(seen)
@@ -118,7 +118,10 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
         line, col = doc.line_col(offset) if text is not None else (None, None)
         v.add("P21-WARNING", "warning", message, line=line, column=col)
 
-    for f in check_population(doc.records(), profile.schema, pop.types_of):
+    def types_of(iid):  # conformance's contract: None for a dangling reference
+        return pop.types_of(iid) if iid in pop else None
+
+    for f in check_population(doc.records(), profile.schema, types_of):
         line, col = v.position(pop, f.entity) if f.entity is not None else (None, None)
         message = f"{f.attribute}: {f.message}" if f.attribute else f.message
         v.add(f.rule, f.severity, message, f.entity, f.entity_type, line, col)

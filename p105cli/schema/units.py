@@ -161,7 +161,13 @@ class UnitReader:
                 raise UnitError(ERROR, u, f"conversion-based unit {shown} #{u}: conversion factor "
                                 f"#{mwu} has no unit_component")
             f, _ = self.unit_factor(base, kind, chain + (u,))
-            return value * f, (cname.lower() if isinstance(cname, str) else f"#{u}")
+            factor = value * f
+            if not (math.isfinite(factor) and factor > 0.0 and math.isfinite(1.0 / factor)):
+                # values are converted both ways: a factor or its inverse beyond the reals is unusable
+                raise UnitError(ERROR, u, f"conversion-based unit {shown} #{u}: its SI factor "
+                                f"{value!r} x {f!r} cannot convert {kind} values (it or its inverse is beyond "
+                                "the range of reals)")
+            return factor, (cname.lower() if isinstance(cname, str) else f"#{u}")
         what = ("context_dependent_unit" if "context_dependent_unit" in t else
                 "+".join(sorted(self.pop.leaf_types_of(u))))
         raise UnitError(WARNING, u, f"{kind} unit #{u} ({what}) has no SI conversion; "

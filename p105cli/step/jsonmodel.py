@@ -30,6 +30,7 @@ from itertools import islice
 from dataclasses import dataclass, field
 
 from .errors import ModelError
+from .index import MAX_INSTANCE_ID
 from .lexer import MAX_NESTING
 from .reader import DataSection
 
@@ -228,6 +229,8 @@ def check_record(record, where: str) -> dict:
     iid = record.get("id")
     if type(iid) is not int or iid < 0:
         raise ModelError("instance record needs a non-negative integer id", where)
+    if iid > MAX_INSTANCE_ID:  # as a Part 21 instance name: the indexes hold 64-bit ids
+        raise ModelError(f"instance id {iid} is too large (at most {MAX_INSTANCE_ID})", where)
     if "complex" in record:
         if set(record) != {"id", "complex"}:
             raise ModelError("complex instance takes only id and complex", where)

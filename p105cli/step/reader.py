@@ -112,6 +112,19 @@ class StepFile:
         from .bulk import decode_all
         return decode_all(self)
 
+    def check(self) -> None:
+        """Decode every instance once, keeping nothing: raises the first error in file order,
+        the one ``parse`` reports. Instances are decoded on demand, so a command that reads
+        only the instances it needs would otherwise never see an error in the others.
+        Warnings are left to the decoding that keeps the records (none recorded twice)."""
+        kept, dropped = len(self.warnings), self.warnings_dropped
+        try:
+            for _ in self.records():
+                pass
+        finally:
+            del self.warnings[kept:]
+            self.warnings_dropped = dropped
+
     def careful_records(self):
         """Every instance decoded one by one by the reference tokenizer."""
         for k in range(len(self.index)):

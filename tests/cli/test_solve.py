@@ -134,3 +134,20 @@ def test_driven_values_rules_are_usage_errors(p105, tmp_path):
     values.write_text("A\n0.1\n")
     r = p105("solve", model, "--values", values, "--set", "A=1", "--to", "jsonl")
     assert r.returncode == 2 and r.stderr.decode() == "p105: error: --set A: the pair is in --values too\n"
+
+
+@pytest.mark.parametrize("model", [[], [EXAMPLES / "four_bar_ap242.stp", "--sweep", "A=0:1.5:3"]],
+                         ids=["scene only", "on a model"])
+def test_no_timings_leaves_every_time_out_of_a_scene_run(p105, model):
+    # the cables' records and the scene's summary said how long they took even with --no-timings
+    args = [*model, "--scene", EXAMPLES / "cable_scene.json", "--no-timings", "--to", "jsonl"]
+    if not model:
+        args += ["--keypoints", EXAMPLES / "cable_keypoints.jsonl"]
+    first = p105("solve", *args)
+    assert first.returncode == 0, first.stderr
+    records = [json.loads(line) for line in first.stdout.splitlines()]
+    assert any(r["type"] == "cable_state" for r in records)
+    assert not [r for r in records if "time_s" in r]
+    assert p105("solve", *args).stdout == first.stdout
+    timed = p105("solve", *[a for a in args if a != "--no-timings"])
+    assert [r for r in map(json.loads, timed.stdout.splitlines()) if "time_s" in r]
