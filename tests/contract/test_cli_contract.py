@@ -168,13 +168,21 @@ def test_closed_pipe_ends_quietly(name, tmp_path):
     assert r.stdout.strip() == str(int(ExitCode.BROKEN_PIPE)).encode()
 
 
+def _default_sigint():
+    # A parent that ignores SIGINT (a pytest-xdist worker, a background job, nohup) passes
+    # that on, and Python then installs no KeyboardInterrupt handler: give the child the
+    # default disposition a user's terminal gives it.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("name", COMMANDS)
 def test_ctrl_c_is_exit_130_without_traceback(name, tmp_path):
     big = (BIG_INPUT[name](tmp_path) if name in BIG_INPUT else EXAMPLE if name in LONG_JOB
            else _big_model(tmp_path, 400_000))
     proc = subprocess.Popen([sys.executable, "-m", "p105cli", *LONG_JOB.get(name, JOB[name]), big,
                              "-o", tmp_path / "o"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT,
+                            preexec_fn=_default_sigint)
     time.sleep(1.0)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
