@@ -22,7 +22,7 @@ from .builder import DERIVED, typed
 from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HIGHER_VALUES,
                         LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, KINEMATIC_ENTITIES)
 from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
-from .layout import link_reps, rep_links
+from .layout import link_reps, occurrence_placement, rep_links
 from .model_file import ModelFile
 from .pair_values import value_attributes
 
@@ -472,16 +472,12 @@ class Conversion:
             if not d.is_a(nauo, "product_definition_relationship") or \
                     d.ref(nauo, "relating_product_definition", optional=True) != ref_id(k.assembly_pd):
                 return np.eye(4)
-            for pds in d.usedin(nauo, "property_definition.definition"):
-                for cdsr in d.usedin(pds, "context_dependent_shape_representation.represented_product_relation"):
-                    rel = d.ref(cdsr, "representation_relation", optional=True)
-                    if not d.is_a(rel, "representation_relationship_with_transformation"):
-                        continue
-                    op = d.ref(rel, "transformation_operator")
-                    r1, r2 = d.ref(rel, "rep_1"), d.ref(rel, "rep_2")
-                    if d.is_a(op, "item_defined_transformation"):
-                        return d.item_defined_transformation(op, d.scale(r1), d.scale(r2))
-                    return d.placement(op, d.scale(r2))
+            found = occurrence_placement(d, nauo)
+            if found is not None:
+                op, r1, r2 = found
+                if d.is_a(op, "item_defined_transformation"):
+                    return d.item_defined_transformation(op, d.scale(r1), d.scale(r2))
+                return d.placement(op, d.scale(r2))
         except ModelError:
             return None
         return np.eye(4)

@@ -379,15 +379,23 @@ def _assembly_placement(mf: ModelFile, ml: MechanismLayout, base) -> Optional[tu
             if assembly_pd is not None and mf.ref(nauo, "relating_product_definition",
                                                   optional=True) != assembly_pd:
                 continue
-            for pds in mf.usedin(nauo, "property_definition.definition"):
-                for cdsr in mf.usedin(pds, "context_dependent_shape_representation.represented_product_relation"):
-                    rel = mf.ref(cdsr, "representation_relation", optional=True)
-                    if not mf.is_a(rel, "representation_relationship_with_transformation"):
-                        continue
-                    op = mf.ref(rel, "transformation_operator")
-                    r1, r2 = mf.ref(rel, "rep_1"), mf.ref(rel, "rep_2")
-                    ml.ids["base_placement"] = op
-                    return (op, r1, r2)
+            found = occurrence_placement(mf, nauo)
+            if found is not None:
+                ml.ids["base_placement"] = found[0]
+                return found
+    return None
+
+
+def occurrence_placement(mf: ModelFile, nauo) -> Optional[tuple]:
+    """``(operator, rep_1, rep_2)``: the transformation that places a product occurrence
+    (``nauo``) in its assembly, from the shape representation relationship of the occurrence
+    (the representations are those the operator's units are read in); None if it has none."""
+    for pds in mf.usedin(nauo, "property_definition.definition"):
+        for cdsr in mf.usedin(pds, "context_dependent_shape_representation.represented_product_relation"):
+            rel = mf.ref(cdsr, "representation_relation", optional=True)
+            if not mf.is_a(rel, "representation_relationship_with_transformation"):
+                continue
+            return mf.ref(rel, "transformation_operator"), mf.ref(rel, "rep_1"), mf.ref(rel, "rep_2")
     return None
 
 
