@@ -16,56 +16,20 @@ has loops, and on a Bennett linkage and a Stewart platform (overconstrained, man
 from __future__ import annotations
 
 import glob
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from kinematics.test_graph import bennett  # the Bennett linkage of the graph tests
 from p105cli.kinematics import solver
 from p105cli.kinematics.graph import analyse, loop_closure
-from p105cli.kinematics.model import Link, Mechanism, Pair
 from p105cli.kinematics.pairs import UnsupportedPairError
-from p105cli.kinematics.spatial import compose, inverse, rot_x, rot_z, trans_x, trans_z
 from p105cli.part105.read_mechanism import read_mechanisms
 from p105cli.step import read_any
 
 ROOT = Path(__file__).resolve().parents[2]
 FILES = sorted(glob.glob(str(ROOT / "tests/data/corpus/*.stp")) + glob.glob(str(ROOT / "examples/*.stp")))
-
-
-def bennett(al=0.6, be=1.1, A=1.0, th1=0.7):
-    """Bennett linkage (an overconstrained 4R loop: mobility 1 with no redundancy only because
-    a/sin(alpha) is equal for both link pairs). The closing angles th3 = -th1, th4 = -th2,
-    tan(th1/2) tan(th2/2) = sin((be+al)/2)/sin((be-al)/2) (Bennett 1903), the sign checked
-    by the chain product."""
-    B = A * math.sin(be) / math.sin(al)
-    a, alpha = [A, B, A, B], [al, be, al, be]
-    k = math.sin((be + al) / 2) / math.sin((be - al) / 2)
-    candidates = []
-    for s in (1, -1):
-        th2 = s * 2 * math.atan(k / math.tan(th1 / 2))
-        for t2 in (th2, -th2, math.pi - th2, th2 - math.pi):
-            th = [th1, t2, -th1, -t2]
-            candidates.append((_misclosure(a, alpha, th), th))
-    err, th = min(candidates, key=lambda c: c[0])
-    assert err < 1e-12, "the Bennett closing angles do not close the chain"
-    return _dh_loop(a, alpha, [0.0] * 4, th, "bennett")
-
-
-def _misclosure(a, alpha, theta):
-    T = np.eye(4)
-    for i in range(4):
-        T = T @ rot_z(theta[i]) @ trans_x(a[i]) @ rot_x(alpha[i])
-    return float(np.abs(T - np.eye(4)).max())
-
-
-def _dh_loop(a, alpha, d, theta, name):
-    n = len(a)
-    links = [Link(f"L{i}") for i in range(n)]
-    pairs = [Pair(f"J{i + 1}", "revolute", f"L{i}", f"L{(i + 1) % n}", np.eye(4),
-                  inverse(compose(trans_z(d[i]), trans_x(a[i]), rot_x(alpha[i])))) for i in range(n)]
-    return Mechanism(name, links, pairs, "L0", initial={f"J{i + 1}": (theta[i],) for i in range(n)})
 
 
 def _corpus():
