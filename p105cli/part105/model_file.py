@@ -281,13 +281,19 @@ class ModelFile:
             if optional or self.is_lenient:
                 return None
             raise model_error(i, f"{self.label(i)} has no {attr} (it is unset)")
-        r = _ref(v)
+        return self._target(i, attr, _ref(v), types)
+
+    def _target(self, i, attr, r, types, item=MISSING) -> Optional[int]:
+        """``r``, the id ``#i.attr`` (or its element ``item``) names, if it is an instance of the
+        file of one of ``types``. Checked: a ModelError saying which of those it is not;
+        lenient: None then."""
         if self.is_lenient:
             if r is None or r not in self.pop or (types and not self.is_a(r, *types)):
                 return None
             return r
         if r is None:
-            raise model_error(i, f"{attr} of {self.label(i)} is not a reference")
+            what = "is not a reference" if item is MISSING else f"holds {item!r}, not a reference"
+            raise model_error(i, f"{attr} of {self.label(i)} {what}")
         if r not in self.pop:
             raise model_error(i, f"{attr} of {self.label(i)} refers to #{r}, which is not in the file")
         if types and not self.is_a(r, *types):
@@ -318,22 +324,8 @@ class ModelFile:
             if self.is_lenient:
                 return []
             raise model_error(i, f"{attr} of {self.label(i)} is not a list")
-        out = []
-        for x in v:
-            r = _ref(x)
-            if self.is_lenient:
-                if r is not None and r in self.pop and not (types and not self.is_a(r, *types)):
-                    out.append(r)
-                continue
-            if r is None:
-                raise model_error(i, f"{attr} of {self.label(i)} holds {x!r}, not a reference")
-            if r not in self.pop:
-                raise model_error(i, f"{attr} of {self.label(i)} refers to #{r}, which is not in the file")
-            if types and not self.is_a(r, *types):
-                raise model_error(i, f"{attr} of {self.label(i)} refers to #{r} ({self.label(r)}), which "
-                                  f"is no {' or '.join(types)}")
-            out.append(r)
-        return out
+        out = (self._target(i, attr, _ref(x), types, x) for x in v)
+        return [r for r in out if r is not None]
 
     def number(self, i, attr, *, optional: bool = False) -> Optional[float]:
         """A finite REAL of ``#i.attr``. Checked: a ModelError otherwise (None when unset and
