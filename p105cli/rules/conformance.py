@@ -29,8 +29,9 @@ Rule ids (stable; ``severity`` is ``error`` unless said otherwise)
 =====================  =====================================================
 rule                   what it checks
 =====================  =====================================================
-SCH-UNKNOWN-ENTITY     (warning) a simple instance whose entity type is not
-                       in the schema; nothing else is checked for it
+SCH-UNKNOWN-ENTITY     a simple instance whose entity type is not in the
+                       schema; nothing else is checked for it (the analysis
+                       commands read such files leniently; the gate does not)
 SCH-ABSTRACT           an ABSTRACT entity instantiated without one of its
                        subtypes (a simple instance of it, or a part of a
                        complex instance with no subtype among the parts)
@@ -39,8 +40,11 @@ SCH-ARITY              a simple instance whose number of parameters differs
                        then not checked)
 SCH-DERIVED            ``*`` where the attribute is not re-declared as
                        DERIVE (in the instance's type or a part of a complex
-                       instance); a derived slot holding anything but ``*``;
-                       ``*`` inside an aggregate
+                       instance); ``$`` in a derived slot; ``*`` inside an
+                       aggregate. An explicit value in a derived slot is not
+                       checked here: ``rules/derived.py`` compares it with
+                       the derivation (``SCH-DERIVED-EXPLICIT`` when equal,
+                       ``SCH-DERIVED-CONFLICT`` when not)
 SCH-OPTIONAL           ``$`` for an attribute that is not OPTIONAL (after
                        redeclarations), or as an aggregate element other
                        than in ``ARRAY OF OPTIONAL``
@@ -125,7 +129,8 @@ RULES = {  # one sentence each, ready for diagnostics.register_rule
     UNKNOWN_ENTITY: "An entity instance's type is not an entity of the schema.",
     ABSTRACT: "An ABSTRACT entity is instantiated without one of its subtypes.",
     ARITY: "An entity instance has the wrong number of attributes for its EXPRESS type.",
-    DERIVED: "'*' is written for an explicit attribute, or a derived attribute is not '*'.",
+    DERIVED: "'*' is written for an explicit attribute, '$' for a derived one, or '*' inside an "
+             "aggregate.",
     OPTIONAL: "'$' is written for an attribute or aggregate element that is not OPTIONAL.",
     TYPE: "An attribute value does not fit its declared EXPRESS type.",
     DANGLING: "An attribute refers to an entity instance that is not in the file.",
@@ -341,26 +346,21 @@ class Checker:
                     out.append(Finding(OPTIONAL, ERROR, f"{slot.name} is not OPTIONAL: $ not allowed",
                                        iid, etype, prefix + slot.name))
                 continue
+            if slot.derived:
+                # an explicit value where the schema derives: whether it equals the
+                # derivation needs the evaluator (rules/derived.py), not this check
+                continue
             tv = type(v)
             if tv in slot.fast:
-                if slot.derived:
-                    out.append(Finding(DERIVED, ERROR, f"{slot.name} is derived (re-declared as "
-                                       f"DERIVE): write *, not {_show(v)}", iid, etype,
-                                       prefix + slot.name))
                 continue
             if tv is dict and v.get("derived") is True:
-                if not slot.derived:
-                    out.append(Finding(DERIVED, ERROR, f"{slot.name} is an explicit attribute: "
-                                       f"* is only for derived ones", iid, etype, prefix + slot.name))
-                continue
-            if slot.derived:
-                out.append(Finding(DERIVED, ERROR, f"{slot.name} is derived (re-declared as DERIVE): "
-                                   f"write *, not {_show(v)}", iid, etype, prefix + slot.name))
+                out.append(Finding(DERIVED, ERROR, f"{slot.name} is an explicit attribute: "
+                                   f"* is only for derived ones", iid, etype, prefix + slot.name))
                 continue
             errs: list = []
             slot.validator(v, types_of, errs)
             for rule, msg in errs:
-                out.append(Finding(rule, ERROR, f"{slot.name}: {msg}", iid, etype, prefix + slot.name))
+                out.append(Finding(rule, ERROR, msg, iid, etype, prefix + slot.name))
 
     def _slot(self, name, optional, derived, tspec) -> _Slot:
         val = self.compile(tspec)
@@ -370,7 +370,7 @@ class Checker:
     def _simple_plan(self, etype: str) -> _Plan:
         schema = self.schema
         if etype not in schema.entities:
-            return _Plan(etype, [(UNKNOWN_ENTITY, WARNING,
+            return _Plan(etype, [(UNKNOWN_ENTITY, ERROR,
                                   f"{etype} is not an entity of schema {schema.name}")])
         static = []
         if self._is_abstract(etype):
