@@ -40,6 +40,8 @@ for _rule, _text in {**CONFORMANCE_RULES, **DERIVED_RULES, **KINEMATICS_RULES}.i
 register_rule("P21-SYNTAX", "The exchange structure is not valid ISO 10303-21 syntax.")
 register_rule("P21-STRUCTURE", "The exchange structure repeats an instance name or is otherwise unusable.")
 register_rule("P21-WARNING", "The reader accepted something the ISO 10303-21 grammar does not allow.")
+register_rule("P21-ENCODING", "Raw 8-bit bytes that are not UTF-8 were read as ISO 8859-1: their "
+                              "characters may be wrong.")
 register_rule("P21-SCHEMA", "FILE_SCHEMA names no schema p105 knows; give one with --schema.")
 
 
@@ -117,9 +119,17 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
     v = Validation(source, doc)
 
     text = getattr(doc, "text", None)
+    encoding = getattr(doc, "not_utf8", None)
+    summary = encoding.summary() if encoding is not None else None
     for message, offset in getattr(doc, "warnings", ()):
+        if (message, offset) == summary:
+            continue  # the reader's one-line summary: the lines follow as P21-ENCODING
         line, col = doc.line_col(offset) if text is not None else (None, None)
         v.add("P21-WARNING", "warning", message, line=line, column=col)
+    if encoding is not None:
+        for message, offset in encoding.details(text):
+            line, col = doc.line_col(offset)
+            v.add("P21-ENCODING", "warning", message, line=line, column=col)
 
     def types_of(iid):  # conformance's contract: None for a dangling reference
         return pop.types_of(iid) if iid in pop else None
