@@ -302,11 +302,13 @@ class Checker:
         }
 
     # ---------------------------------------------------------- public
-    def check(self, record: dict, types_of: TypesOf) -> list:
+    def check(self, record: dict, types_of: TypesOf, derived_values: Optional[set] = None) -> list:
+        """The findings of one record; the id of a record that writes a value in a derived
+        slot is added to ``derived_values`` (for ``rules/derived.py``)."""
         iid = record.get("id")
         complex_parts = record.get("complex")
         if complex_parts is not None:
-            return self._check_complex(iid, complex_parts, types_of)
+            return self._check_complex(iid, complex_parts, types_of, derived_values)
         etype = record.get("type")
         plan = self._plans.get(etype)
         if plan is None:
@@ -321,7 +323,7 @@ class Checker:
                                f"({', '.join(map(_slot_str, slots))}), found {len(args)}",
                                iid, etype))
             return out
-        self._check_slots(slots, args, types_of, out, iid, etype, "")
+        self._check_slots(slots, args, types_of, out, iid, etype, "", derived_values)
         return out
 
     def closure(self, name: str) -> frozenset:
@@ -336,7 +338,8 @@ class Checker:
         return c
 
     # ---------------------------------------------------------- slots
-    def _check_slots(self, slots, args, types_of, out, iid, etype, prefix) -> None:
+    def _check_slots(self, slots, args, types_of, out, iid, etype, prefix,
+                     derived_values=None) -> None:
         for slot, v in zip(slots, args):
             if v is None:
                 if slot.derived:
@@ -349,6 +352,8 @@ class Checker:
             if slot.derived:
                 # an explicit value where the schema derives: whether it equals the
                 # derivation needs the evaluator (rules/derived.py), not this check
+                if derived_values is not None and not (type(v) is dict and v.get("derived") is True):
+                    derived_values.add(iid)
                 continue
             tv = type(v)
             if tv in slot.fast:
@@ -414,7 +419,7 @@ class Checker:
         return out
 
     # ---------------------------------------------------------- complex
-    def _check_complex(self, iid, parts: list, types_of: TypesOf) -> list:
+    def _check_complex(self, iid, parts: list, types_of: TypesOf, derived_values=None) -> list:
         key = tuple(p.get("type") for p in parts)
         plan = self._complex_plans.get(key)
         if plan is None:
@@ -433,7 +438,7 @@ class Checker:
                                    f"{', '.join(map(_slot_str, slots)) or 'none'}), found {len(args)}",
                                    iid, label, pname))
                 continue
-            self._check_slots(slots, args, types_of, out, iid, label, pname + ".")
+            self._check_slots(slots, args, types_of, out, iid, label, pname + ".", derived_values)
         return out
 
     def _complex_plan(self, names: tuple) -> _Plan:
@@ -909,12 +914,13 @@ def check_instance(record: dict, schema: Schema, types_of: TypesOf) -> list:
     return checker_for(schema).check(record, types_of)
 
 
-def check_population(records: Iterable[dict], schema: Schema,
-                     types_of: TypesOf) -> Iterator[Finding]:
-    """The findings of every instance, in the order of ``records``."""
+def check_population(records: Iterable[dict], schema: Schema, types_of: TypesOf,
+                     derived_values: Optional[set] = None) -> Iterator[Finding]:
+    """The findings of every instance, in the order of ``records``; the ids of the
+    instances that write a value in a derived slot are added to ``derived_values``."""
     check = checker_for(schema).check
     for record in records:
-        yield from check(record, types_of)
+        yield from check(record, types_of, derived_values)
 
 
 def step_types_of(step_file, schema: Schema) -> TypesOf:

@@ -30,10 +30,12 @@ are compared with the later derivation all the same, and a contradiction
 is ``SCH-DERIVED-CONFLICT`` (AP242 states that rule as
 ``conversion_based_unit.wr1``).
 
-Only the instances of the few entity types that re-declare an attribute as
-DERIVE are looked at (from the type index), so a large file costs nothing.
+Only the instances that write a value in a derived slot are looked at
+(``conformance.check_population`` collects them as it decodes every record
+anyway), and those of the edition's explicit derivations, from the type
+index: a large file costs next to nothing.
 
-Entry point: ``check_derived(pop) -> list[Finding]``.
+Entry point: ``check_derived(pop, candidates=None) -> list[Finding]``.
 """
 
 from __future__ import annotations
@@ -85,14 +87,22 @@ def _derived_entities(schema, profile) -> dict:
     return out
 
 
-def check_derived(pop) -> list:
-    """The SCH-DERIVED-EXPLICIT / SCH-DERIVED-CONFLICT findings of ``pop``, in id order."""
+def check_derived(pop, candidates=None) -> list:
+    """The SCH-DERIVED-EXPLICIT / SCH-DERIVED-CONFLICT findings of ``pop``, in id order.
+
+    ``candidates``: the ids of the instances that write a value in a derived slot, when
+    known (``conformance.check_population`` collects them while it decodes every record);
+    else every instance of an entity type that re-declares an attribute as DERIVE is looked
+    at. The instances of the edition's explicit derivations are looked at either way."""
     profile = pop.profile
     _ = profile.schema if profile is not None else None  # loads explicit_derivations
     entities = _derived_entities(pop.schema, profile)
     ids: set = set()
-    for name in entities:
-        ids.update(pop.ids_of_type(name, subtypes=True))
+    for name, specs in entities.items():
+        if candidates is None or any(decl is not None for *_, decl in specs):
+            ids.update(pop.ids_of_type(name, subtypes=True))
+    if candidates is not None:
+        ids.update(i for i in candidates if i in pop)
     if not ids:
         return []
     ev = Evaluator(pop)

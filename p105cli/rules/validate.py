@@ -135,7 +135,9 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
         return pop.types_of(iid) if iid in pop else None
 
     stand_in = stand_in_for(doc.header, profile)
-    for f in chain(check_population(doc.records(), profile.schema, types_of), check_derived(pop)):
+    writes_derived: set = set()  # instances with a value in a derived slot
+    findings = list(check_population(doc.records(), profile.schema, types_of, writes_derived))
+    for f in chain(findings, check_derived(pop, writes_derived)):
         line, col = v.position(pop, f.entity) if f.entity is not None else (None, None)
         message = f"{f.attribute}: {f.message}" if f.attribute else f.message
         severity = f.severity

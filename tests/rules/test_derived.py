@@ -169,3 +169,26 @@ def test_edition_1_cad_exports_give_no_derived_error(name):
     path: Path = REAL_CAD / name
     result = validate_document(read_step(path.read_text(encoding="latin-1"), str(path)), str(path))
     assert not [d for d in result.diagnostics if d.rule.startswith("SCH-DERIVED")]
+
+
+def test_the_new_rule_ids_have_descriptions_for_sarif():
+    from p105cli.rules.diagnostics import rule_description
+    assert "equal to its derivation" in rule_description("SCH-DERIVED-EXPLICIT")
+    assert "contradicts the derivation" in rule_description("SCH-DERIVED-CONFLICT")
+    assert "not UTF-8" in rule_description("P21-ENCODING")
+
+
+def test_only_instances_that_write_a_derived_slot_are_evaluated():
+    from p105cli.rules.conformance import check_population
+    from p105cli.rules.derived import check_derived
+    from p105cli.schema.population import Population
+    text = part21(AP242_ED1, PRISMATIC.format(name="*", flags=".T.,*,*,*,*,*"))
+    sf = read_step(text, "t.stp")
+    pop = Population(sf)
+    writes: set = set()
+    list(check_population(sf.records(), pop.schema, lambda i: pop.types_of(i) if i in pop else None,
+                          writes))
+    assert writes == {10}
+    (f,) = check_derived(pop, writes)
+    assert (f.rule, f.entity, f.attribute) == ("SCH-DERIVED-EXPLICIT", 10, "t_x")
+    assert check_derived(pop, set()) == []
