@@ -43,7 +43,7 @@ from __future__ import annotations
 from ..schema.evaluator import EntityValue, EnumValue, Evaluator, NotEvaluable, TypedValue
 from ..schema.instance import Instance
 from ..schema.model import BinaryOp, Name
-from .conformance import ERROR, WARNING, Finding
+from .conformance import ERROR, WARNING, Finding, _a
 
 __all__ = ["DERIVED_EXPLICIT", "DERIVED_CONFLICT", "RULES", "check_derived"]
 
@@ -195,8 +195,7 @@ def _freedoms_in_words(ev, inst, differ) -> str:
         moves = [_FREEDOMS[n] for n in _FREEDOMS if flags.get(n) is True]
         return " and ".join(moves) if moves else "does not move"
     leaf = "+".join(sorted(inst.leaf_types))
-    return (f" (the file's pair {words(file_flags)}; {'an' if leaf[:1] in 'aeiou' else 'a'} "
-            f"{leaf} {words(derived_flags)})")
+    return f" (the file's pair {words(file_flags)}; {_a(leaf)} {words(derived_flags)})"
 
 
 def _show(ev, v, depth: int = 0) -> str:
