@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -67,8 +67,13 @@ def export(to, schema, occt_compat, input, output, stream):
         raise click.UsageError("--occt-compat applies to --schema ap242 only")
     doc = load_document(input)
     if schema is not None:
+        from p105cli.part105.emit import NotWritableError
         report_warnings(doc)
-        doc = _convert(doc, schema, occt_compat)
+        try:
+            doc = _convert(doc, schema, occt_compat)
+        except NotWritableError as err:  # the target cannot express it: no output, not a bad input
+            diag("error", f"{doc.source}: {err}")
+            return ExitCode.FINDINGS
     with open_output(output, (input,)) as out:
         if to == "p21":
             emit_p21(doc, out)

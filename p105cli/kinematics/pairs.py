@@ -186,7 +186,7 @@ from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
     "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
-    "VALUE_UNITS",
+    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "named_low_order", "low_order_components",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -692,9 +692,56 @@ def _rc_j(q, p, shape):
     return _col([c1 + c2 * du2[..., None]], shape)
 
 
-# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz); M = T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz), locked values 0
+# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free. A flag set
+# equal to a named low-order pair's moves as that pair (its values taken from the components
+# LOW_ORDER_NAMED gives); any other flag set moves as T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz).
 
 _FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
+FREEDOM_NAMES = _FLAGS
+
+#: The named low-order pairs as flag sets of AP242's generic ``low_order_kinematic_pair``:
+#: kind -> (flags t_x..r_z as AP242 derives them, the component (0..5 = tx, ty, tz, rx, ry,
+#: rz of a ``low_order_kinematic_pair_value``) that gives each of the kind's values, in
+#: value order). The one table that says what a flag set and a low-order value mean for a
+#: named pair. The spherical pairs' (yaw, pitch, roll) are (rz, ry, rx): Annex E's
+#: ``Rx(roll) Ry(pitch) Rz(yaw)`` is the generic composition; a universal pair's first
+#: rotation (about the first frame's z) is rz, its second (about x) rx. A prismatic pair
+#: slides along x in AP242 (the only layout with this entity; see low_order_components).
+#: Order matters where two kinds share a flag set: the first is the one a generic pair is
+#: read as (universal, not its homokinetic subtype).
+LOW_ORDER_NAMED = {
+    "revolute": ((0, 0, 0, 0, 0, 1), (5,)),
+    "prismatic": ((1, 0, 0, 0, 0, 0), (0,)),
+    "cylindrical": ((0, 0, 1, 0, 0, 1), (2, 5)),
+    "spherical": ((0, 0, 0, 1, 1, 1), (5, 4, 3)),
+    "spherical_with_pin": ((0, 0, 0, 0, 1, 1), (5, 4, 3)),
+    "universal": ((0, 0, 0, 1, 0, 1), (5, 3)),
+    "homokinetic": ((0, 0, 0, 1, 0, 1), (5, 3)),
+    "planar": ((1, 1, 0, 0, 0, 1), (5, 0, 1)),
+    "unconstrained": ((1, 1, 1, 1, 1, 1), (0, 1, 2, 5, 4, 3)),
+    "fully_constrained": ((0, 0, 0, 0, 0, 0), ()),
+}
+
+
+def named_low_order(flags) -> "str | None":
+    """The named pair kind whose freedoms are the flags ``(t_x, ..., r_z)``, or None."""
+    key = tuple(int(bool(f)) for f in flags)
+    for kind, (named, _components) in LOW_ORDER_NAMED.items():
+        if named == key:
+            return kind
+    return None
+
+
+def low_order_components(kind: str, layout: str = "ap242") -> tuple:
+    """The component (0..5 = tx, ty, tz, rx, ry, rz of a low-order value) giving each value
+    of a ``kind`` pair; a prismatic pair's slide axis is its layout's (1996: z)."""
+    if kind == "prismatic":
+        return (_slide_axis(layout),)
+    return LOW_ORDER_NAMED[kind][1]
+
+
+def _flag_tuple(p) -> tuple:
+    return tuple(bool(p[f]) for f in _FLAGS)
 
 
 #: A locked value of a low order pair within this of 0 is 0: the solver's steps leave roundoff
@@ -709,14 +756,37 @@ def _low_check(q, p):
                              f"({LOW_ORDER.value_names[i]}), which must be 0")
 
 
+def _low_named(p):
+    """(the named PairType, its components) when the flags are a named pair's, else None."""
+    kind = named_low_order(_flag_tuple(p))
+    if kind is None:
+        return None
+    t = PAIR_KINDS[kind]
+    return (t.with_defaults(layout="ap242") if kind == "prismatic" else t), low_order_components(kind)
+
+
 def _low_m(q, p):
     _low_check(q, p)
+    named = _low_named(p)
+    if named is not None:
+        t, comps = named
+        shape = p["_shape"]
+        return t.motion(np.stack([q[c] for c in comps], axis=-1) if comps else np.zeros(shape + (0,)))
     t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
     return transform(ypr_rotation(q[5], q[4], q[3]), t)
 
 
 def _low_j(q, p, shape):
     _low_check(q, p)
+    named = _low_named(p)
+    if named is not None:
+        t, comps = named
+        J = np.zeros(shape + (6, 6))
+        if comps:
+            Jn = t.motion_jacobian(np.stack([q[c] for c in comps], axis=-1))
+            for i, c in enumerate(comps):
+                J[..., :, c] = Jn[..., :, i]
+        return J
     R = ypr_rotation(q[5], q[4], q[3])
     cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
     wz, wy, wx = _ypr_body_axes(*np.broadcast_arrays(q[5], q[4]))
@@ -794,6 +864,22 @@ class PairType:
     def angle_mask(self) -> tuple:
         """Which values are plane angles (``value_units == "A"``)."""
         return tuple(u == "A" for u in self.value_units)
+
+    def locked(self, params=None) -> tuple:
+        """Which values are held at 0 whatever the motion (a zero Jacobian column, never moved
+        by the solver): a generic low-order pair's values whose flag is FALSE, a spherical
+        pair with pin's roll. ``params`` as for :meth:`motion`."""
+        if self.kind == "low_order":
+            p = {**self.defaults, **dict(params or {})}
+            return tuple(not p[f] for f in _FLAGS)
+        if self.kind == "spherical_with_pin":
+            return (False, False, True)
+        return (False,) * self.value_count
+
+    def freedoms(self, params=None) -> int:
+        """The number of the pair's freedoms: its values less the locked ones (the one count
+        the graph and the solver use)."""
+        return self.value_count - sum(self.locked(params))
 
     def with_defaults(self, **defaults) -> "PairType":
         """The same pair type with other parameter defaults (e.g. ``layout="ap242"``)."""
