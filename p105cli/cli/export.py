@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -19,6 +19,7 @@ def _convert(doc, schema: str, occt_compat: bool):
     with naming_source(doc):
         model = ModelFile.of(doc)  # one population: the mechanism is read and converted from it
         mechanisms = read_mechanisms(model)
+    report_reading(doc.source, model)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
