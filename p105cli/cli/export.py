@@ -51,7 +51,11 @@ def export(to, schema, occt_compat, input, output, stream):
     With --schema the mechanism is converted between the Part 105:1996
     layout (ap214; p105 allows su_parameters) and the AP242 layout;
     everything else in the file is kept, and whatever the target cannot
-    express is reported on stderr with its #id.
+    express is reported on stderr with its #id. A pair the target has no
+    entity for (an AP242 low_order_kinematic_pair whose freedom flags are
+    no named pair's, going to the 1996 layout) is not dropped: the
+    conversion is refused with exit 1, naming the pair, and nothing is
+    written.
 
     --occt-compat (AP242 only): Open CASCADE's reader misreads the
     standard '*' of derived attributes (it takes the freedom flags of a

@@ -72,7 +72,8 @@ sliding_surface        (u1, v1, u2, v2, rotation); params         ``F1(u1,v1) Rz
 rolling_surface        (u1, v1, rotation); + state (u2, v2)       as sliding_surface, no slip
 sliding_curve          (u1, u2); curve_1, curve_2, orientation    ``G1(u1) Rz(pi)^[not o] G2(u2)^-1``
 rolling_curve          (u1,); u2 from equal arc lengths           as sliding_curve
-low_order (AP242)      (tx, ty, tz, rx, ry, rz); flags t_x..r_z   ``T(t) Rx(rx) Ry(ry) Rz(rz)``
+low_order (AP242)      (tx, ty, tz, rx, ry, rz); flags t_x..r_z   a named pair's flags: its M;
+                                                                  else ``T(t) Rx(rx) Ry(ry) Rz(rz)``
 spherical_with_pin     (yaw, pitch, roll = 0)                     ``Ry(pitch) Rz(yaw)``
 =====================  =========================================  ==============================
 
@@ -159,10 +160,15 @@ Where these come from, and what had to be chosen:
   non-holonomic: ``point_on_surface_2`` is state and their Jacobian is the
   no-slip velocity map (:func:`rolling_surface_rates`). Degenerate contact
   frames raise ValueError (never NaN).
-* low_order (AP242 ``low_order_kinematic_pair``): translation first, then
+* low_order (AP242 ``low_order_kinematic_pair``): its flags are the rule
+  (:data:`LOW_ORDER_NAMED`). A flag set that is a named pair's (only r_z:
+  revolute, ...) moves as that pair, its values taken from the components
+  the table gives; any other flag set moves translation first, then
   ``Rx(rx) Ry(ry) Rz(rz)`` (= the ypr matrix with roll, pitch, yaw = rx, ry,
-  rz, so a spherical pair is the low order pair with the three r flags); a
-  value whose flag is FALSE must be 0 and has a zero Jacobian column.
+  rz; it agrees with every named pair but the universal pair, which turns
+  about z first). A value whose flag is FALSE must be 0 and has a zero
+  Jacobian column; :meth:`PairType.freedoms` counts the TRUE flags. EXPRESS
+  gives no composition (docs/pairs.md).
 * spherical_pair_with_pin: its ``spherical_pair_value`` ypr with the roll
   (about x) locked, as AP242's DERIVE (r_x FALSE, r_y and r_z TRUE) says.
   (``spherical_pair_with_pin_and_range`` bounds yaw and roll, not pitch; we
