@@ -98,3 +98,20 @@ def test_export_to_1996_refuses_a_generic_pair_no_named_pair_has(p105, tmp_path)
         assert got.returncode == 1 and got.stdout == b""
         assert f"p105: error: {src}: #183: pair 'B': a low_order_kinematic_pair with t_x = TRUE".encode() in got.stderr
         assert target.read_text() == "before"
+
+
+@pytest.mark.parametrize("name", ("four_bar_low_order_value", "four_bar_low_order_pair"))
+def test_solve_to_model_writes_values_validate_passes(p105, tmp_path, name):
+    """The results added to the model: a generic pair's values are low_order_kinematic_pair_value
+    (revolute_pair_value applies to a revolute_pair only), the named pairs' their own; the file
+    validates clean."""
+    out = tmp_path / "solved.stp"
+    got = p105("solve", "--to", "model", _defect(name), "-o", out)
+    assert got.returncode == 0, got.stderr.decode()
+    text = out.read_text()
+    generic = name.endswith("_pair")  # pin B (#183) is the generic pair there
+    added = re.findall(r"#\d+=(\w+)\('B',#183,", text)
+    assert added and set(added) == ({"LOW_ORDER_KINEMATIC_PAIR_VALUE"} if generic else
+                                    {"REVOLUTE_PAIR_VALUE", "LOW_ORDER_KINEMATIC_PAIR_VALUE"})
+    check = p105("validate", out)
+    assert check.returncode == 0, check.stdout.decode()

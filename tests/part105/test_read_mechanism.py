@@ -767,17 +767,18 @@ def test_spherical_screw_universal_cylindrical_pairs_from_closed_forms():
     assert _close(T[:3, 3], [0.0, 0.0, 0.020 + 0.00125])
 
 
-def _generic_pin_b(flags, values):
+def _generic_pin_b(flags, values, limits=None):
     """The AP242 four-bar with pin B rewritten as AP242's generic low_order_kinematic_pair with
-    ``flags`` (t_x .. r_z) and its values as low_order_kinematic_pair_value ``values(angle)``."""
+    ``flags`` (t_x .. r_z) and its values as low_order_kinematic_pair_value ``values(angle)``;
+    ``limits``: the twelve limits of low_order_kinematic_pair_with_range (file units)."""
     _, recs = _records("four_bar", "ap242")
     pid = next(r["id"] for r in recs if r.get("type") == "revolute_pair" and r["args"][0] == "B")
 
     def edit(data):
         for r in data:
             if r["id"] == pid:
-                r["type"] = "low_order_kinematic_pair"
-                r["args"] = r["args"][:6] + [{"enum": "T" if f else "F"} for f in flags]
+                r["type"] = "low_order_kinematic_pair" + ("_with_range" if limits else "")
+                r["args"] = r["args"][:6] + [{"enum": "T" if f else "F"} for f in flags] + list(limits or ())
             elif r.get("type") == "revolute_pair_value" and r["args"][1]["ref"] == pid:
                 r["type"] = "low_order_kinematic_pair_value"
                 r["args"] = r["args"][:2] + list(values(r["args"][2]))
@@ -795,6 +796,18 @@ def test_ap242_generic_low_order_pair_with_revolute_flags_is_the_revolute_pair()
     assert (b.kind, b.freedoms, dict(b.params)) == ("revolute", 1, {})
     assert m.initial["B"] == pytest.approx(ref.initial["B"], rel=1e-15)
     assert _close(b.transform(m.initial["B"]), ref.pair("B").transform(ref.initial["B"]), 1e-15)
+
+
+def test_a_generic_revolute_pairs_limits_are_its_rotation_z_limits():
+    """low_order_kinematic_pair_with_range lists rotation limits (x, y, z), then translation
+    limits: read as a revolute pair, pin B is bounded by lower/upper_limit_actual_rotation_z
+    (degrees in the four-bar's file); the other, locked, limits bound nothing."""
+    limits = [-1.0, 1.0, None, None, -120.0, 150.0, -5.0, 5.0, None, None, None, None]
+    doc, _pid = _generic_pin_b((0, 0, 0, 0, 0, 1), lambda a: (0.0, 0.0, 0.0, 0.0, 0.0, a), limits)
+    b = read_mechanism(doc).pair("B")
+    assert b.kind == "revolute"
+    assert (b.lower, b.upper) == (pytest.approx((-120.0 * math.pi / 180,), rel=1e-12),
+                                  pytest.approx((150.0 * math.pi / 180,), rel=1e-12))
 
 
 def test_ap242_generic_low_order_pair_with_no_named_flags_keeps_its_six_values():
