@@ -160,15 +160,10 @@ Where these come from, and what had to be chosen:
   non-holonomic: ``point_on_surface_2`` is state and their Jacobian is the
   no-slip velocity map (:func:`rolling_surface_rates`). Degenerate contact
   frames raise ValueError (never NaN).
-* low_order (AP242 ``low_order_kinematic_pair``): its flags are the rule
-  (:data:`LOW_ORDER_NAMED`). A flag set that is a named pair's (only r_z:
-  revolute, ...) moves as that pair, its values taken from the components
-  the table gives; any other flag set moves translation first, then
-  ``Rx(rx) Ry(ry) Rz(rz)`` (= the ypr matrix with roll, pitch, yaw = rx, ry,
-  rz; it agrees with every named pair but the universal pair, which turns
-  about z first). A value whose flag is FALSE must be 0 and has a zero
-  Jacobian column; :meth:`PairType.freedoms` counts the TRUE flags. EXPRESS
-  gives no composition (docs/pairs.md).
+* low_order (AP242 ``low_order_kinematic_pair``): a named pair's flags move
+  as that pair (:data:`LOW_ORDER_NAMED`); others translation first, then
+  ``Rx(rx) Ry(ry) Rz(rz)`` (the ypr matrix, roll, pitch, yaw = rx, ry, rz).
+  A locked value must be 0 (zero Jacobian column); docs/pairs.md.
 * spherical_pair_with_pin: its ``spherical_pair_value`` ypr with the roll
   (about x) locked, as AP242's DERIVE (r_x FALSE, r_y and r_z TRUE) says.
   (``spherical_pair_with_pin_and_range`` bounds yaw and roll, not pitch; we
@@ -698,23 +693,16 @@ def _rc_j(q, p, shape):
     return _col([c1 + c2 * du2[..., None]], shape)
 
 
-# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free. A flag set
-# equal to a named low-order pair's moves as that pair (its values taken from the components
-# LOW_ORDER_NAMED gives); any other flag set moves as T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz).
+# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free
 
 _FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
 FREEDOM_NAMES = _FLAGS
 
-#: The named low-order pairs as flag sets of AP242's generic ``low_order_kinematic_pair``:
-#: kind -> (flags t_x..r_z as AP242 derives them, the component (0..5 = tx, ty, tz, rx, ry,
-#: rz of a ``low_order_kinematic_pair_value``) that gives each of the kind's values, in
-#: value order). The one table that says what a flag set and a low-order value mean for a
-#: named pair. The spherical pairs' (yaw, pitch, roll) are (rz, ry, rx): Annex E's
-#: ``Rx(roll) Ry(pitch) Rz(yaw)`` is the generic composition; a universal pair's first
-#: rotation (about the first frame's z) is rz, its second (about x) rx. A prismatic pair
-#: slides along x in AP242 (the only layout with this entity; see low_order_components).
-#: Order matters where two kinds share a flag set: the first is the one a generic pair is
-#: read as (universal, not its homokinetic subtype).
+#: The one table of what a flag set and a low-order value mean: kind -> (the flags t_x..r_z
+#: AP242 derives for it, the component (0..5 = tx, ty, tz, rx, ry, rz) of a
+#: low_order_kinematic_pair_value giving each of its values). Spherical (yaw, pitch, roll) =
+#: (rz, ry, rx); universal: rz then rx; prismatic: AP242's t_x. Where two kinds share flags,
+#: the first is the one a generic pair is (universal, not homokinetic). docs/pairs.md.
 LOW_ORDER_NAMED = {
     "revolute": ((0, 0, 0, 0, 0, 1), (5,)),
     "prismatic": ((1, 0, 0, 0, 0, 0), (0,)),
@@ -746,10 +734,6 @@ def low_order_components(kind: str, layout: str = "ap242") -> tuple:
     return LOW_ORDER_NAMED[kind][1]
 
 
-def _flag_tuple(p) -> tuple:
-    return tuple(bool(p[f]) for f in _FLAGS)
-
-
 #: A locked value of a low order pair within this of 0 is 0: the solver's steps leave roundoff
 #: (1e-19) on it through the pseudo-inverse, though its Jacobian column is zero.
 _LOCKED_ROUNDOFF = 1e-12
@@ -764,20 +748,22 @@ def _low_check(q, p):
 
 def _low_named(p):
     """(the named PairType, its components) when the flags are a named pair's, else None."""
-    kind = named_low_order(_flag_tuple(p))
+    kind = named_low_order([p[f] for f in _FLAGS])
     if kind is None:
         return None
     t = PAIR_KINDS[kind]
     return (t.with_defaults(layout="ap242") if kind == "prismatic" else t), low_order_components(kind)
 
 
+def _named_q(q, comps, shape):
+    return np.stack([q[c] for c in comps], axis=-1) if comps else np.zeros(shape + (0,))
+
+
 def _low_m(q, p):
     _low_check(q, p)
     named = _low_named(p)
     if named is not None:
-        t, comps = named
-        shape = p["_shape"]
-        return t.motion(np.stack([q[c] for c in comps], axis=-1) if comps else np.zeros(shape + (0,)))
+        return named[0].motion(_named_q(q, named[1], p["_shape"]))
     t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
     return transform(ypr_rotation(q[5], q[4], q[3]), t)
 
@@ -785,13 +771,9 @@ def _low_m(q, p):
 def _low_j(q, p, shape):
     _low_check(q, p)
     named = _low_named(p)
-    if named is not None:
-        t, comps = named
+    if named is not None:  # the named pair's columns at its components, zero elsewhere
         J = np.zeros(shape + (6, 6))
-        if comps:
-            Jn = t.motion_jacobian(np.stack([q[c] for c in comps], axis=-1))
-            for i, c in enumerate(comps):
-                J[..., :, c] = Jn[..., :, i]
+        J[..., list(named[1])] = named[0].motion_jacobian(_named_q(q, named[1], shape))
         return J
     R = ypr_rotation(q[5], q[4], q[3])
     cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
@@ -872,9 +854,8 @@ class PairType:
         return tuple(u == "A" for u in self.value_units)
 
     def locked(self, params=None) -> tuple:
-        """Which values are held at 0 whatever the motion (a zero Jacobian column, never moved
-        by the solver): a generic low-order pair's values whose flag is FALSE, a spherical
-        pair with pin's roll. ``params`` as for :meth:`motion`."""
+        """Which values are held at 0 (a zero Jacobian column, never moved by the solver): a
+        generic low-order pair's whose flag is FALSE, a spherical pair with pin's roll."""
         if self.kind == "low_order":
             p = {**self.defaults, **dict(params or {})}
             return tuple(not p[f] for f in _FLAGS)
@@ -883,8 +864,7 @@ class PairType:
         return (False,) * self.value_count
 
     def freedoms(self, params=None) -> int:
-        """The number of the pair's freedoms: its values less the locked ones (the one count
-        the graph and the solver use)."""
+        """The pair's freedoms: its values less the locked ones (the graph's count)."""
         return self.value_count - sum(self.locked(params))
 
     def with_defaults(self, **defaults) -> "PairType":
