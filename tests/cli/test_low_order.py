@@ -79,9 +79,9 @@ def test_a_locked_component_of_a_value_is_a_warning_naming_it(p105, tmp_path):
                           [json.loads(x) for x in want.stdout.decode().splitlines()]) == []
 
 
-def test_export_to_1996_refuses_a_generic_pair_no_named_pair_has(p105, tmp_path):
-    """Flags t_x and r_z: AP242 writes it (exit 0), the 1996 layout cannot (exit 1, the pair
-    named, nothing on stdout, -o left alone)."""
+def _generic_source(tmp_path):
+    """The example with pin B as a generic low-order pair with flags t_x and r_z (no named pair
+    has them): a pin that may also slide along its frame's x axis."""
     text = SOURCE.read_text()
     text, n = re.subn(r"#183=REVOLUTE_PAIR\('B',\*,'crank-coupler pin',(#\d+,#\d+,#\d+),\*,\*,\*,\*,\*,\*\);",
                       r"#183=LOW_ORDER_KINEMATIC_PAIR('B',*,'pin',\1,.T.,.F.,.F.,.F.,.F.,.T.);", text)
@@ -90,6 +90,28 @@ def test_export_to_1996_refuses_a_generic_pair_no_named_pair_has(p105, tmp_path)
                   r"LOW_ORDER_KINEMATIC_PAIR_VALUE('B',#183,0.,0.,0.,0.,0.,\1)", text)
     src = tmp_path / "generic.stp"
     src.write_text(text)
+    return src
+
+
+def test_graph_and_solve_count_and_move_only_the_flags(p105, tmp_path):
+    """Mobility 2 (the slide adds one), pin B two freedoms; every solved configuration keeps
+    the four locked components exactly 0."""
+    src = _generic_source(tmp_path)
+    g = json.loads(p105("graph", src).stdout)
+    assert g["mobility"] == 2 and [j["freedoms"] for j in g["joints"]] == [1, 2, 1, 1]
+    got = p105("solve", "--to", "jsonl", "--program", src)  # the example's two-configuration program
+    assert got.returncode == 0, got.stderr.decode()
+    configs = [r for r in map(json.loads, got.stdout.decode().splitlines()) if r["type"] == "configuration"]
+    assert len(configs) > 1
+    for r in configs:
+        b = r["pairs"]["B"]
+        assert len(b) == 6 and [b[i] for i in (1, 2, 3, 4)] == [0.0, 0.0, 0.0, 0.0]
+
+
+def test_export_to_1996_refuses_a_generic_pair_no_named_pair_has(p105, tmp_path):
+    """Flags t_x and r_z: AP242 writes it (exit 0), the 1996 layout cannot (exit 1, the pair
+    named, nothing on stdout, -o left alone)."""
+    src = _generic_source(tmp_path)
     assert p105("export", "--schema", "ap242", src).returncode == 0
     target = tmp_path / "out.stp"
     target.write_text("before")
