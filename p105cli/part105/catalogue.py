@@ -302,6 +302,24 @@ WRITTEN_HIGHER_RANGES = ("point_on_planar_curve", "point_on_surface")
 HIGHER_PARAMS_NOT_IN_FILE = {"reference_parameter_1": 0.0, "reference_parameter_2": 0.0,
                              "point_on_surface_2": None}
 
+#: ``FREEDOM_FLAGS`` (read on first use, :func:`__getattr__`): AP242's derived freedom flags (t_x,
+#: t_y, t_z, r_x, r_y, r_z) of the named low-order pairs p105 writes, which are also the freedoms
+#: an actuated pair drives, from ``kinematics.pairs.LOW_ORDER_NAMED`` (the one table). Screw,
+#: gear and rack-and-pinion pairs are low_order_kinematic_pair_with_motion_coupling subtypes
+#: (no flags: COUPLED_FREEDOMS).
+
+
+def __getattr__(name):
+    # the one flags table lives with the pair motions (numpy): imported when first asked for
+    if name == "FREEDOM_FLAGS":
+        from ..kinematics.pairs import LOW_ORDER_NAMED
+
+        value = {k: flags for k, (flags, _c) in LOW_ORDER_NAMED.items() if k in WRITTEN_LOW_KINDS}
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: The freedom an actuated coupled pair drives (it has no flags of its own).
 COUPLED_FREEDOMS = {"screw": (0, 0, 0, 0, 0, 1), "gear": (0, 0, 0, 0, 0, 1),
                     "rack_and_pinion": (1, 0, 0, 0, 0, 0)}

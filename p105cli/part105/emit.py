@@ -18,11 +18,11 @@ from collections import defaultdict
 import numpy as np
 
 from p105cli.kinematics.dh import Z_TO_X
-from p105cli.kinematics.pairs import FREEDOM_NAMES, LOW_ORDER_NAMED, PAIR_KINDS
+from p105cli.kinematics.pairs import FREEDOM_NAMES, PAIR_KINDS
 from p105cli.kinematics.spatial import compose, inverse
 
 from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
-from .catalogue import (COUPLED_FREEDOMS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
+from .catalogue import (COUPLED_FREEDOMS, FREEDOM_FLAGS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
                         PROFILES, RANGE_KINDS_1996, RANGE_KINDS_AP242, WRITTEN_HIGHER_RANGES, WRITTEN_LOW_KINDS,
                         pair_entity)
 from .pair_values import scalar_values, value_arguments, value_entity
@@ -40,12 +40,6 @@ class NotWritableError(ValueError):
     """The target layout cannot express a pair of the mechanism (the message names it): the
     file is not written (exit 1), rather than written without the pair."""
 
-
-#: AP242: the derived freedom flags (t_x, t_y, t_z, r_x, r_y, r_z) of the written low-order
-#: pairs, which are also the freedoms an actuated pair drives (kinematics.pairs.LOW_ORDER_NAMED,
-#: the one table). Screw, gear and rack-and-pinion pairs are
-#: low_order_kinematic_pair_with_motion_coupling subtypes (no flags: COUPLED_FREEDOMS).
-FREEDOM_FLAGS = {k: flags for k, (flags, _components) in LOW_ORDER_NAMED.items() if k in VALUE_UNITS}
 #: The higher pair kinds written (their geometry with them).
 HIGHER_KINDS_WRITTEN = tuple(HIGHER_GEOMETRY)
 #: Every pair kind p105 writes.
