@@ -172,6 +172,14 @@ class Progress:
             self._bar.stop()
 
 
+def report_reading(source, model_file) -> None:
+    """Print the warnings reading the mechanisms and pair values of ``model_file`` gave (each
+    names its ``#id``; :func:`p105cli.part105.pair_values.reading_warnings`) on stderr."""
+    from p105cli.part105.pair_values import reading_warnings
+    for message in reading_warnings(model_file):
+        diag("warning", f"{source}: {message}")
+
+
 def report_warnings(doc) -> None:
     """Print the reader's warnings and dangling references of ``doc`` on stderr."""
     from p105cli.step.checks import dangling_references

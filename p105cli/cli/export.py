@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -19,6 +19,7 @@ def _convert(doc, schema: str, occt_compat: bool):
     with naming_source(doc):
         model = ModelFile.of(doc)  # one population: the mechanism is read and converted from it
         mechanisms = read_mechanisms(model)
+    report_reading(doc.source, model)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
@@ -50,7 +51,11 @@ def export(to, schema, occt_compat, input, output, stream):
     With --schema the mechanism is converted between the Part 105:1996
     layout (ap214; p105 allows su_parameters) and the AP242 layout;
     everything else in the file is kept, and whatever the target cannot
-    express is reported on stderr with its #id.
+    express is reported on stderr with its #id. A pair the target has no
+    entity for (an AP242 low_order_kinematic_pair whose freedom flags are
+    no named pair's, going to the 1996 layout) is not dropped: the
+    conversion is refused with exit 1, naming the pair, and nothing is
+    written.
 
     --occt-compat (AP242 only): Open CASCADE's reader misreads the
     standard '*' of derived attributes (it takes the freedom flags of a
@@ -67,8 +72,13 @@ def export(to, schema, occt_compat, input, output, stream):
         raise click.UsageError("--occt-compat applies to --schema ap242 only")
     doc = load_document(input)
     if schema is not None:
+        from p105cli.part105.emit import NotWritableError
         report_warnings(doc)
-        doc = _convert(doc, schema, occt_compat)
+        try:
+            doc = _convert(doc, schema, occt_compat)
+        except NotWritableError as err:  # the target cannot express it: no output, not a bad input
+            diag("error", f"{doc.source}: {err}")
+            return ExitCode.FINDINGS
     with open_output(output, (input,)) as out:
         if to == "p21":
             emit_p21(doc, out)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings
 from .inputs import load_document, naming_source, source_of
 from .options import count_option, input_argument, output_option, schema_option, step_option, to_option
 
@@ -58,6 +58,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     given = _check(t_values, step, count, to, what)
     from p105cli.formats import samples
     from p105cli.motion import sampling
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.motion import sample_model
 
     doc = load_document(input)
@@ -66,8 +67,8 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
                          quaternion=quaternion, ypr=ypr)
     try:
         with naming_source(doc):
-            result = sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
-                                  profile=schema)
+            model = ModelFile.of(doc, schema)  # kept: its reading warnings are reported
+            result = sample_model(model, what=what, paths=paths, sequences=sequences, plan=plan)
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
     for inst, msg in result.skipped:
@@ -81,6 +82,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
     report_warnings(doc)
+    report_reading(source_of(doc), model)
     if not result.path_list and not result.sequence_list:
         diag("error", f"{source_of(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
         raise click.exceptions.Exit(ExitCode.FINDINGS)

@@ -148,6 +148,11 @@ class Pair:
         return self.type.value_count
 
     @property
+    def freedoms(self) -> int:
+        """The pair's freedoms: its values less those its flags lock (:meth:`PairType.freedoms`)."""
+        return self.type.freedoms(self.params)
+
+    @property
     def value_names(self) -> tuple:
         return self.type.value_names
 

@@ -24,7 +24,7 @@ from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HI
 from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
 from .layout import link_reps, occurrence_placement, rep_links
 from .model_file import ModelFile
-from .pair_values import value_attributes
+from .pair_values import low_order_value_arguments, value_attributes
 
 __all__ = ["Conversion"]
 
@@ -515,6 +515,9 @@ class Conversion:
         if name is None:
             return None
         kind = self.mech.pair(name).kind
+        if rec["type"] == "low_order_kinematic_pair_value":  # read by its own type: as the pair's value
+            got = low_order_value_arguments(kind, rest, self.mech.pair(name).params.get("layout", "ap242"))
+            return None if got is None else (name, *got)
         if kind in HIGHER_VALUES:
             rest = self._higher_value(kind, rest)
             if rest is None:
