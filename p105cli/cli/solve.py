@@ -17,8 +17,8 @@ from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output,
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
-from .solve_rules import check_usage
-from .solve_scene import load_scene, model_scene, run_scene, scene_only
+from .solve_rules import check_scene_options, check_usage
+from .solve_scene import check_samples, load_scene, model_scene, prepare_scene, run_scene, scene_only
 
 FORMATS = ["model", "jsonl", "csv"]
 
@@ -90,6 +90,9 @@ def solve(**options):
     --target-link. Exit 1 when any configuration is not ok.
     """
     o = SimpleNamespace(**options)
+    ctx = click.get_current_context()
+    o.given = {name for name in options
+               if ctx.get_parameter_source(name) not in (None, click.core.ParameterSource.DEFAULT)}
     o.to_given = o.to is not None
     o.to = o.to or ("jsonl" if o.scene is not None else "model")
     o.want = check_usage(o)
@@ -103,8 +106,13 @@ def solve(**options):
     doc = model.doc
     if o.scene_dict is None and getattr(doc, "scene", None) is not None:
         o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
+    # the scene is checked before the mechanism is solved: no output precedes its errors
+    o.prepared = prepare_scene(o, mech) if o.scene_dict is not None else None
+    check_scene_options(o)
     prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
+    if o.prepared is not None:
+        check_samples(o.prepared, mech, _samples(motion))
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
     if _output(o, model, mech, pl, motion, blocks, requests):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
@@ -114,7 +122,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
     """Every block written (and the scene run on the motion); the warnings. True on findings."""
     from p105cli.formats.solve_records import Table, Tally, write_blocks
     tally = Tally(motion.inverse)
-    placements = [] if o.scene_dict is not None else None
+    placements = [] if o.prepared is not None else None
     with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
         if o.to == "model":
             def write(result, links, t, offset):
@@ -126,8 +134,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
         write_blocks(blocks, motion.t, write, tally, mech.link_names, placements)
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
-            if o.scene_dict is not None and not run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
-                                                           o.pictures, o.timings):
+            if o.prepared is not None and not run_scene(o.prepared, placements, out, o.pictures, o.timings):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
@@ -180,6 +187,17 @@ def _start(o, doc, mech, prog):
     except solver.SolveError as err:
         raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
     return pl, motion, itertools.chain([first], blocks)
+
+
+def _samples(motion) -> int | None:
+    """How many configurations the motion has (None: not known before it is solved)."""
+    if motion.t is not None:
+        return len(motion.t)
+    if motion.poses is not None:
+        return len(motion.poses)
+    if motion.driven:
+        return len(next(iter(motion.driven.values())))
+    return None
 
 
 def _check_pair_parameters(o, mech, pl):
