@@ -65,15 +65,17 @@ FORMATS = ["model", "jsonl", "csv"]
 @length_unit_option
 @mechanism_option
 @input_schema(SCHEMA_HELP_SHORT)
-@click.option("--scene", metavar="FILE", default=None,
-              help="A scene (JSON or TOML) of effects to simulate on the solved motion (cables).")
-@click.option("--keypoints", metavar="FILE", default=None,
+@click.option("--scene", metavar="FILE|-", default=None,
+              help="A scene (JSON or TOML; from standard input TOML unless it is a JSON object) of effects "
+                   "to simulate on the solved motion (cables).")
+@click.option("--keypoints", metavar="FILE|-", default=None,
               help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
-@click.option("--plot", "plot", metavar="FILE", default=None,
-              help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; "
-                   "needs matplotlib: pip install 'p105cli[plot]').")
-@click.option("--animate", "animation", metavar="FILE", default=None,
-              help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html).")
+@click.option("--plot", "plot", metavar="FILE|-", default=None,
+              help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; - : SVG "
+                   "on standard output, the records going to -o; needs matplotlib: pip install 'p105cli[plot]').")
+@click.option("--animate", "animation", metavar="FILE|-", default=None,
+              help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html; "
+                   "- : HTML on standard output, the records going to -o).")
 @click.option("--timings/--no-timings", default=True, show_default=True,
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
@@ -87,7 +89,19 @@ def solve(**options):
     the initial state, which fixes the assembly branch. A branch change, a
     dead centre or a configuration that cannot be assembled is reported on
     that configuration (status), never silently. Inverse: --path with
-    --target-link. Exit 1 when any configuration is not ok.
+    --target-link. Exit 1 when any configuration is not ok, or a scene's
+    cable is over-length or cannot be solved; the reason is on standard
+    error.
+
+    Every FILE option reads standard input when given as -, one of them
+    per run. An option that would do nothing in the mode chosen is a usage
+    error (exit 2), checked before anything is solved, as is a scene and its
+    key points: --plot, --animate and --keypoints without a scene that runs;
+    --target-link and --target-frame without --path; --resulting-path
+    without --to model; --timings with --to csv or model; --angle-unit or
+    --length-unit with --to model and nothing to convert; options of the
+    analysis of a model (--program, --mechanism, --schema, --tol,
+    --max-iter, --resulting-path, the units) with a scene alone.
     """
     o = SimpleNamespace(**options)
     ctx = click.get_current_context()
@@ -104,7 +118,8 @@ def solve(**options):
         return scene_only(o)
     model, mech = _read_model(o.model, o.schema, o.mechanism)
     doc = model.doc
-    if o.scene_dict is None and getattr(doc, "scene", None) is not None:
+    o.scene_in_model = o.scene_dict is None and getattr(doc, "scene", None) is not None
+    if o.scene_in_model:
         o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
     # the scene is checked before the mechanism is solved: no output precedes its errors
     o.prepared = prepare_scene(o, mech) if o.scene_dict is not None else None

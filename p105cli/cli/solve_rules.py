@@ -36,8 +36,8 @@ def check_scene_options(o) -> None:
     scene's cables need a scene that is run."""
     if o.prepared is not None:
         return
-    why = ("the model has no scene and no --scene is given" if o.scene_dict is None
-           else f"the model's scene is run with --to jsonl only (not --to {o.to})")
+    why = (f"the model's scene is run with --to jsonl only (not --to {o.to})" if o.scene_in_model
+           else "the model has no scene and no --scene is given")
     for name, value in (("--keypoints", o.keypoints), ("--plot", o.plot), ("--animate", o.animation)):
         if value is not None:
             raise click.UsageError(f"{name} is for a scene's cables: {why}")

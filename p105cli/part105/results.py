@@ -55,7 +55,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     exactly when a resulting path is there). Returns ``(document, notes)``."""
     from p105cli.step.jsonmodel import extended
 
-    from .pair_values import scalar_values, value_arguments, value_entity
+    from .pair_values import scalar_values, value_arguments, value_entity, ypr_values
 
     from .model_file import ModelFile
 
@@ -95,7 +95,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
             raise ValueError(f"pair {p.name!r} has no instance in the model")
         conv = scalar_values(p.type.value_units, q, lambda x: float(x) / af, lambda x: float(x) / lf)
         if p.kind == "spherical":
-            vals = [{"type": "YPR_ROTATION", "value": conv}]
+            vals = [{"type": "YPR_ROTATION", "value": ypr_values(q, lambda x: float(x) / af)}]
         elif p.kind == "unconstrained":
             M = p.motion(np.asarray(q, dtype=np.float64))
             o = new("cartesian_point", [f"{p.name} value", [float(x) / lf for x in M[:3, 3]]])
