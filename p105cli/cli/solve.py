@@ -15,7 +15,7 @@ import click
 
 from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings, stderr_is_terminal
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
-from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
+from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, file_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
 from .solve_rules import check_scene_options, check_usage
 from .solve_scene import check_samples, load_scene, model_scene, prepare_scene, run_scene, scene_only
@@ -25,19 +25,19 @@ FORMATS = ["model", "jsonl", "csv"]
 
 @click.command(epilog=EXIT_STATUS_TEXT)
 @model_argument
-@click.option("--values", "values", metavar="FILE|-", default=None,
-              help="Driven pair values, one configuration per row: CSV with a header of pair names "
-                   "(name[0], name[1]... for multi-valued pairs) and an optional t column, or JSON Lines "
-                   '{"t": t, "pairs": {name: value}}.')
+@file_option("--values", "values",
+             help="Driven pair values, one configuration per row: CSV with a header of pair names "
+                  "(name[0], name[1]... for multi-valued pairs) and an optional t column, or JSON Lines "
+                  '{"t": t, "pairs": {name: value}}.')
 @click.option("--set", "sets", metavar="PAIR=VALUE", multiple=True,
               help="Drive PAIR at VALUE in every configuration (PAIR=V1,V2 or PAIR[j]=V for multi-valued "
                    "pairs). Without --values: one configuration.")
 @click.option("--sweep", "sweeps", metavar="PAIR=START:STOP:COUNT", multiple=True,
               help="Drive PAIR from START to STOP in COUNT evenly spaced configurations (instead of "
                    "--values; several --sweep options run together).")
-@click.option("--path", "path", metavar="FILE|-", default=None,
-              help="Inverse analysis: target poses of --target-link, JSON Lines {\"t\": t, \"pose\": 4x4} "
-                   "or CSV t,m00,...,m23.")
+@file_option("--path", "path",
+             help="Inverse analysis: target poses of --target-link, JSON Lines {\"t\": t, \"pose\": 4x4} "
+                  "or CSV t,m00,...,m23.")
 @click.option("--target-link", metavar="LINK", default=None, help="The link whose frame follows --path.")
 @click.option("--target-frame", metavar="NAME", default=None,
               help="A named frame of --target-link to put on the path (default: the link frame).")
@@ -65,17 +65,17 @@ FORMATS = ["model", "jsonl", "csv"]
 @length_unit_option
 @mechanism_option
 @input_schema(SCHEMA_HELP_SHORT)
-@click.option("--scene", metavar="FILE|-", default=None,
-              help="A scene (JSON or TOML; from standard input TOML unless it is a JSON object) of effects "
-                   "to simulate on the solved motion (cables).")
-@click.option("--keypoints", metavar="FILE|-", default=None,
-              help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
-@click.option("--plot", "plot", metavar="FILE|-", default=None,
-              help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; - : SVG "
-                   "on standard output, the records going to -o; needs matplotlib: pip install 'p105cli[plot]').")
-@click.option("--animate", "animation", metavar="FILE|-", default=None,
-              help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html; "
-                   "- : HTML on standard output, the records going to -o).")
+@file_option("--scene", "scene",
+             help="A scene (JSON or TOML; from standard input TOML unless it is a JSON object) of effects "
+                  "to simulate on the solved motion (cables).")
+@file_option("--keypoints", "keypoints",
+             help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
+@file_option("--plot", "plot",
+             help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; - : SVG "
+                  "on standard output, the records going to -o; needs matplotlib: pip install 'p105cli[plot]').")
+@file_option("--animate", "animation",
+             help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html; "
+                  "- : HTML on standard output, the records going to -o).")
 @click.option("--timings/--no-timings", default=True, show_default=True,
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
