@@ -17,7 +17,7 @@ from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output,
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, file_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
-from .solve_rules import check_scene_options, check_usage
+from .solve_rules import check_after_reading, check_usage
 from .solve_scene import check_samples, load_scene, model_scene, prepare_scene, run_scene, scene_only
 
 FORMATS = ["model", "jsonl", "csv"]
@@ -123,7 +123,7 @@ def solve(**options):
         o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
     # the scene is checked before the mechanism is solved: no output precedes its errors
     o.prepared = prepare_scene(o, mech) if o.scene_dict is not None else None
-    check_scene_options(o)
+    check_after_reading(o)
     prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
     if o.prepared is not None:

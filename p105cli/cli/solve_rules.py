@@ -9,7 +9,7 @@ import click
 
 from .options import check_tol
 
-__all__ = ["check_scene_options", "check_usage"]
+__all__ = ["check_after_reading", "check_usage"]
 
 
 def check_usage(o):
@@ -31,9 +31,20 @@ def check_usage(o):
     return want
 
 
-def check_scene_options(o) -> None:
-    """Once the model is read (it may carry its own scene): the options that move or draw a
-    scene's cables need a scene that is run."""
+def check_after_reading(o) -> None:
+    """Once the model is read (it may carry its own scene, which makes JSON Lines the default
+    output), before anything is solved: the options that would do nothing with the output and
+    the scene that will be."""
+    given = o.given
+    if o.to != "jsonl" and "timings" in given and o.timings:
+        raise click.UsageError(f"--timings reports times in the jsonl summary: --to {o.to} has none")
+    if o.to == "model":
+        if "angle_unit" in given and not (o.values is not None or o.sets or o.sweeps):
+            raise click.UsageError("--angle-unit is the unit of --values, --set, --sweep and the jsonl/csv "
+                                   "output: with --to model and none of them it does nothing")
+        if "length_unit" in given and not (o.values is not None or o.sets or o.sweeps or o.path is not None):
+            raise click.UsageError("--length-unit is the unit of --values, --set, --sweep, --path and the "
+                                   "jsonl/csv output: with --to model and none of them it does nothing")
     if o.prepared is not None:
         return
     why = (f"the model's scene is run with --to jsonl only (not --to {o.to})" if o.scene_in_model
@@ -84,15 +95,6 @@ def _check_idle(o):
         if idle is not None:
             raise click.UsageError(f"{idle} is for the analysis of a MODEL: --scene without a model runs "
                                    "the scene alone (its records are in SI units)")
-    if o.to != "jsonl" and "timings" in given and o.timings:
-        raise click.UsageError(f"--timings reports times in the jsonl summary: --to {o.to} has none")
-    if o.to == "model":
-        if "angle_unit" in given and not (o.values is not None or o.sets or o.sweeps):
-            raise click.UsageError("--angle-unit is the unit of --values, --set, --sweep and the jsonl/csv "
-                                   "output: with --to model and none of them it does nothing")
-        if "length_unit" in given and not (o.values is not None or o.sets or o.sweeps or o.path is not None):
-            raise click.UsageError("--length-unit is the unit of --values, --set, --sweep, --path and the "
-                                   "jsonl/csv output: with --to model and none of them it does nothing")
 
 
 def _check_motion(values, sets, sweeps, path, target_link, program):

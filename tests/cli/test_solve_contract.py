@@ -125,6 +125,17 @@ def test_a_model_scene_not_run_makes_scene_options_usage_errors(p105, tmp_path):
     assert r.returncode == 2 and "the model's scene is run with --to jsonl only (not --to csv)" in r.stderr.decode()
 
 
+def test_a_model_scene_makes_jsonl_the_output_the_options_are_checked_against(p105, tmp_path):
+    # --timings and --angle-unit are checked once the model is read: its scene makes the output jsonl
+    model = json.loads(p105("parse", FOUR_BAR).stdout)
+    model["scene"] = {"format": "p105-scene/1"}
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(model))
+    r = p105("solve", f, "--timings", "--angle-unit", "deg")
+    assert r.returncode == 0, r.stderr
+    assert _records(r)[-1]["type"] == "summary"
+
+
 def test_the_defaults_and_no_timings_stay_quiet(p105):
     # --no-timings asks for reproducible output, which csv and model output are anyway
     for to in ("csv", "model"):
