@@ -84,6 +84,8 @@ def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pa
     code = exit_code(results, fail_on, exit_zero)
     if output is not None:
         _say_unreadable(results)
+        if code == ExitCode.FINDINGS:
+            _say_findings(results, output)
     _report(fmt, results, output, inputs, pass_through)
     if pass_through and code == ExitCode.OK and raws[0] is not None:
         copy_to_stdout(raws[0])  # the input's own bytes, unchanged
@@ -122,6 +124,15 @@ def _say_unreadable(results):
             for d in result.diagnostics:
                 where = f"{d.file}:{d.line}:{d.column}" if d.line else d.file
                 diag("error", f"{where}: {d.message}")
+
+
+def _say_findings(results, output):
+    """The report is in a file: an exit 1 still says why on stderr, one line per file."""
+    for result in results:
+        s = result.summary
+        if result.readable and (s.errors or s.warnings or s.notes):
+            diag("error", f"{result.file}: {s.errors} errors, {s.warnings} warnings, {s.notes} notes "
+                          f"(the report is in {output})")
 
 
 def _report(fmt, results, output, inputs, pass_through):

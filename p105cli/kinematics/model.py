@@ -225,8 +225,9 @@ class Mechanism:
                     raise ValueError(f"mechanism {self.name!r}: pair {p.name!r} names unknown link {ln!r}")
         if self.base not in known:
             raise ValueError(f"mechanism {self.name!r}: base link {self.base!r} is not one of its links")
+        pset = set(pnames)
         for k, v in self.initial.items():
-            if k not in pnames:
+            if k not in pset:
                 raise ValueError(f"mechanism {self.name!r}: initial state names unknown pair {k!r}")
 
     # -- lookups

@@ -236,6 +236,12 @@ class Limit(NamedTuple):
 
 YPR_NAMES = ("yaw", "pitch", "roll")
 
+#: How close (relative to pi/2) a ypr pitch is to +-pi/2 to be at the rectangular pitch angle
+#: of 5.3.7, where the roll must be 0, and how far (relative to pi or pi/2) a ypr angle may lie
+#: outside its interval: the one tolerance of the validator (KIN-YPR) and of the writer
+#: (pair_values.ypr_values), so that every triple p105 writes is one it accepts.
+YPR_REL_TOL = 1e-6
+
 #: Every limit suffix of both layouts (the only ones the schemas have).
 LIMITS = {
     "actual_rotation": Limit("actual_rotation", "A", None),

@@ -25,7 +25,7 @@ from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from .catalogue import (COUPLED_FREEDOMS, FREEDOM_FLAGS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
                         PROFILES, RANGE_KINDS_1996, RANGE_KINDS_AP242, WRITTEN_HIGHER_RANGES, WRITTEN_LOW_KINDS,
                         pair_entity)
-from .pair_values import scalar_values, value_arguments, value_entity
+from .pair_values import scalar_values, value_arguments, value_entity, ypr_values
 
 __all__ = ["Emitter", "IdBuilder", "NotWritableError", "write_kinematics", "SUPPORTED_KINDS", "VALUE_UNITS", "HIGHER_KINDS_WRITTEN"]
 
@@ -305,9 +305,11 @@ class Emitter:
 
     def orientation(self, ypr):
         """A pair's orientation (yaw, pitch, roll in SI): the typed ypr_rotation, or for Open
-        CASCADE (which reads that select as a real) the equal rotation_about_direction."""
+        CASCADE (which reads that select as a real) the equal rotation_about_direction. The
+        triple written is the canonical one of 5.3.7 (roll 0 at a rectangular pitch: what
+        validate accepts), whatever triple the analysis produced or the user drove."""
         if not self.occt:
-            return typed("ypr_rotation", [self.A(x) for x in ypr])
+            return typed("ypr_rotation", ypr_values(ypr, self.A))
         from p105cli.kinematics.spatial import rotation_vector
         from p105cli.kinematics.placements import ypr_rotation
 

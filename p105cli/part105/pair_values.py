@@ -304,6 +304,16 @@ def scalar_values(units, q, angle, length) -> list:
     return [angle(x) if u == "A" else length(x) for u, x in zip(units, q)]
 
 
+def ypr_values(ypr, angle) -> list:
+    """A ``ypr_rotation``'s three values in the file (``angle(x)`` from radians): THE way p105
+    writes a ypr triple. It is the canonical triple of 5.3.7
+    (:func:`p105cli.kinematics.placements.canonical_ypr`: roll 0 at a rectangular pitch),
+    whatever triple the analysis produced or the user drove, so validate accepts it."""
+    from p105cli.kinematics.placements import canonical_ypr
+    from .catalogue import YPR_REL_TOL
+    return [angle(x) for x in canonical_ypr(*ypr, YPR_REL_TOL)]
+
+
 def value_attributes(mf: ModelFile, v) -> tuple:
     """``(pair id, [raw value of each of the value entity's own attributes, in order])`` of pair
     value ``#v``, in file units (what a converter copies into the other layout); the pair id is
@@ -315,4 +325,4 @@ def value_attributes(mf: ModelFile, v) -> tuple:
 
 
 __all__ += ["value_entity", "is_generic_low_order", "low_order_components_of", "low_order_value_arguments",
-            "value_arguments", "scalar_values", "value_attributes"]
+            "value_arguments", "scalar_values", "ypr_values", "value_attributes"]

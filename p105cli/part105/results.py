@@ -58,7 +58,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     from p105cli.kinematics.pairs import LOW_ORDER
 
     from .pair_values import is_generic_low_order, low_order_components_of, scalar_values, value_arguments, \
-        value_entity
+        value_entity, ypr_values
 
     from .model_file import ModelFile
 
@@ -102,7 +102,7 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
                                  lambda x: float(x) / af, lambda x: float(x) / lf)
             return new(value_entity("low_order"), value_arguments(layout, p.name, {"ref": pair_ref}, vals))
         if p.kind == "spherical":
-            vals = [{"type": "YPR_ROTATION", "value": conv}]
+            vals = [{"type": "YPR_ROTATION", "value": ypr_values(q, lambda x: float(x) / af)}]
         elif p.kind == "unconstrained":
             M = p.motion(np.asarray(q, dtype=np.float64))
             o = new("cartesian_point", [f"{p.name} value", [float(x) / lf for x in M[:3, 3]]])

@@ -92,7 +92,8 @@ def plan(mech) -> Plan:
     from ..graph import topology
 
     order, tree, roots, _, _, loops = topology(mech)
-    missing = [n for n in mech.link_names if n not in order]
+    reached = set(order)
+    missing = [n for n in mech.link_names if n not in reached]
     if missing:
         raise SolveError(f"mechanism {mech.name!r}: links {missing} are not connected to the base "
                          f"link {mech.base!r}")
