@@ -75,14 +75,15 @@ def parse_document(text: str, source: str, *, decodes_all: bool = False):
     """A Part 21 or p105/1 JSON model from text (sniffed); StepError on bad input.
 
     Every instance of a Part 21 file is decoded once here, so that a syntax error anywhere
-    in the file is reported as FILE:LINE:COL (exit 2) by every command, before any analysis
-    (which decodes only the instances it reads). ``decodes_all``: the caller decodes every
-    instance in file order itself (``parse``, ``validate``) and reports the same error."""
+    in the file is reported as FILE:LINE:COL (exit 2) by every command, before any analysis;
+    the records are kept, and the analysis reads them without decoding again
+    (``StepFile.check``). ``decodes_all``: the caller decodes every instance in file order
+    itself (``parse``, ``validate``) and reports the same error."""
     from p105cli.step import StepFile, read_any
     with nesting_guard(source):
         doc = read_any(text, source)
         if not decodes_all and isinstance(doc, StepFile):
-            doc.check()
+            doc.check(keep=True)
     return doc
 
 

@@ -31,7 +31,7 @@ two DATA sections; comments between instances blanked out) becomes JSON:
    enumerations and strings go back in, and ``json`` decodes the lot.
 
 Anything outside that subset goes to the careful path
-(``StepFile._decode_slot``), instance by instance and in file order:
+(``StepFile._decode_careful``), instance by instance and in file order:
 complex instances, typed parameters, comments inside an instance,
 binaries, user-defined entity names, positive exponents of 100 or more,
 mantissas of 200 digits or more, nesting of MAX_NESTING - 10 or more,
@@ -124,15 +124,18 @@ class _EnumJson(dict):
 _ENUM_JSON = _EnumJson()
 
 
-def decode_all(step_file):
-    """Yield every instance record of ``step_file`` in file order."""
+def decode_all(step_file, warn=None):
+    """Yield every instance record of ``step_file`` in file order; its warnings go to ``warn``
+    (message, offset), by default the file's own list."""
+    if warn is None:
+        warn = step_file._warn
     end = 0
     for section in step_file.sections:  # no chunk spans two DATA sections
         begin, end = end, end + section.count
         for a in range(begin, end, CHUNK):
             out: list = []
             try:
-                _decode_range(step_file, a, min(a + CHUNK, end), out)
+                _decode_range(step_file, a, min(a + CHUNK, end), out, warn)
             except Exception:
                 # The careful path's error, after every record before it.
                 yield from out
@@ -140,26 +143,26 @@ def decode_all(step_file):
             yield from out
 
 
-def _decode_range(sf, a: int, b: int, out: list) -> None:
+def _decode_range(sf, a: int, b: int, out: list, warn) -> None:
     """Append the records of slots a..b-1: complex ones careful, runs of simple ones fast."""
     types = sf.index.types
     if None not in types[a:b]:
-        _decode_run(sf, a, b, out)
+        _decode_run(sf, a, b, out, warn)
         return
     k = a
     while k < b:
         if types[k] is None:
-            out.append(sf._decode_slot(k))
+            out.append(sf._decode_careful(k, warn))
             k += 1
             continue
         j = k
         while j < b and types[j] is not None:
             j += 1
-        _decode_run(sf, k, j, out)
+        _decode_run(sf, k, j, out, warn)
         k = j
 
 
-def _decode_run(sf, a: int, b: int, out: list) -> None:
+def _decode_run(sf, a: int, b: int, out: list, warn) -> None:
     """Append the records of slots a..b-1 (no complex instance among them).
 
     A run the fast path refuses is split around the instances it blames
@@ -171,12 +174,12 @@ def _decode_run(sf, a: int, b: int, out: list) -> None:
     while todo:
         a, b = todo.pop()
         if b is None:
-            out.append(sf._decode_slot(a))
+            out.append(sf._decode_careful(a, warn))
             continue
         if a >= b:
             continue
         try:
-            out += _fast(sf, a, b)
+            out += _fast(sf, a, b, warn)
             continue
         except _Fail as fail:
             blamed = sorted({a + rel for rel in fail.blame or () if 0 <= rel < b - a})
@@ -214,7 +217,7 @@ def _blame(code: str, positions) -> _Fail:
     return _Fail(slots)
 
 
-def _fast(sf, a: int, b: int) -> list:
+def _fast(sf, a: int, b: int, warn) -> list:
     """The records of slots a..b-1, or _Fail (or the JSON parser's ValueError)."""
     idx = sf.index
     n = b - a
@@ -350,7 +353,7 @@ def _fast(sf, a: int, b: int) -> list:
             gc.enable()
     if warnings:
         for message, offset in warnings:
-            sf._warn(message, offset)
+            warn(message, offset)
     return records
 
 

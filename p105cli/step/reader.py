@@ -5,11 +5,18 @@ edition 3 ANCHOR / REFERENCE / SIGNATURE sections, which are kept
 verbatim), indexes every instance in one pass and decodes nothing else.
 ``StepFile.record(id)`` decodes one instance; ``StepFile.records()``
 decodes them all, in file order.
+
+``StepFile.check(keep=True)`` decodes every instance once and keeps the
+records: every later read (``record``, ``records``, the typed population and
+its back-reference index) is then served from them, never decoded again.
+Each served read adds the warnings its decoding would have added, so what
+is reported does not depend on whether the records were kept.
 """
 
 from __future__ import annotations
 
 import re
+from bisect import bisect_right
 from dataclasses import dataclass, field
 
 from .errors import StepError, StepSyntaxError
@@ -152,6 +159,10 @@ class StepFile:
     # Raw 8-bit bytes that are not UTF-8 (one summary among ``warnings``; validate
     # reports each line).
     not_utf8: NotUtf8 | None = None
+    # Every record, kept by check(keep=True) (None: instances are decoded on demand), and
+    # the warnings their decoding gave, by slot (replayed on each read, as a decoding would).
+    _kept: list | None = field(default=None, repr=False, compare=False)
+    _kept_warnings: dict = field(default_factory=dict, repr=False, compare=False)
 
     def _warn(self, message: str, offset: int) -> None:
         if len(self.warnings) < MAX_WARNINGS:
@@ -163,9 +174,18 @@ class StepFile:
         return len(self.index)
 
     def _decode_slot(self, k: int) -> dict:
+        """The record in slot ``k``: kept, or decoded now by the careful tokenizer."""
+        kept = self._kept
+        if kept is None:
+            return self._decode_careful(k, self._warn)
+        for message, offset in self._kept_warnings.get(k, ()):
+            self._warn(message, offset)
+        return kept[k]
+
+    def _decode_careful(self, k: int, warn) -> dict:
         idx = self.index
         try:
-            return parse_instance_body(self.text, idx.starts[k], idx.ends[k], self._warn)
+            return parse_instance_body(self.text, idx.starts[k], idx.ends[k], warn)
         except StepError as err:
             _attach(err, self.text, self.source)
             raise
@@ -178,27 +198,62 @@ class StepFile:
         return self._decode_slot(k)
 
     def records(self):
-        """Every instance, decoded, in file order (the bulk decoder; see bulk.py)."""
+        """Every instance, decoded, in file order (the bulk decoder, see bulk.py; or the kept
+        records, see :meth:`check`)."""
+        if self._kept is not None:
+            return self._served()
         from .bulk import decode_all
         return decode_all(self)
 
-    def check(self) -> None:
-        """Decode every instance once, keeping nothing: raises the first error in file order,
-        the one ``parse`` reports. Instances are decoded on demand, so a command that reads
-        only the instances it needs would otherwise never see an error in the others.
-        Warnings are left to the decoding that keeps the records (none recorded twice)."""
-        kept, dropped = len(self.warnings), self.warnings_dropped
-        try:
-            for _ in self.records():
+    def _served(self):
+        warnings = self._kept_warnings
+        for k, record in enumerate(self._kept):
+            if k in warnings:
+                for message, offset in warnings[k]:
+                    self._warn(message, offset)
+            yield record
+
+    def check(self, keep: bool = False) -> None:
+        """Decode every instance once: raises the first error in file order, the one ``parse``
+        reports. Instances are decoded on demand, so a command that reads only the instances
+        it needs would otherwise never see an error in the others. Warnings are left to the
+        reads that follow (none recorded twice).
+
+        ``keep``: keep the records and serve every later read from them (no instance decoded
+        twice; the records of a file take about 2.5 times its size in memory). Not kept when
+        the decoding gave more than MAX_WARNINGS warnings (they could not be replayed
+        exactly), nor when there is an error."""
+        from .bulk import decode_all
+        if self._kept is not None:
+            return
+        given: list = []
+        overflow = False
+
+        def warn(message, offset):
+            nonlocal overflow
+            if len(given) < MAX_WARNINGS:
+                given.append((message, offset))
+            else:
+                overflow = True
+
+        decoded = decode_all(self, warn)
+        if not keep:
+            for _ in decoded:
                 pass
-        finally:
-            del self.warnings[kept:]
-            self.warnings_dropped = dropped
+            return
+        records = list(decoded)
+        if not overflow:
+            starts = self.index.starts
+            by_slot: dict = {}
+            for message, offset in given:
+                k = max(bisect_right(starts, offset) - 1, 0)
+                by_slot.setdefault(k, []).append((message, offset))
+            self._kept, self._kept_warnings = records, by_slot
 
     def careful_records(self):
         """Every instance decoded one by one by the reference tokenizer."""
         for k in range(len(self.index)):
-            yield self._decode_slot(k)
+            yield self._decode_careful(k, self._warn)
 
     def slots_of_type(self, *types: str) -> list[int]:
         """File-order positions of the simple instances of the given (lower-case) types."""

@@ -86,13 +86,13 @@ def careful_slots(text: str) -> list[int]:
     """Slots the bulk decoder hands to the careful path (their records checked too)."""
     sf = read_step(text, "t.stp")
     used = []
-    decode = sf._decode_slot
+    decode = sf._decode_careful
 
-    def spy(k):
+    def spy(k, warn):
         used.append(k)
-        return decode(k)
+        return decode(k, warn)
 
-    sf._decode_slot = spy
+    sf._decode_careful = spy
     records = list(sf.records())
     reference = list(read_step(text, "t.stp").careful_records())
     assert len(records) == len(reference)
@@ -152,8 +152,8 @@ def test_big_file_mostly_fast():
     from p105cli.step import decode_bytes
     sf = read_step(decode_bytes(path.read_bytes()), str(path))
     used = []
-    decode = sf._decode_slot
-    sf._decode_slot = lambda k: (used.append(k), decode(k))[1]
+    decode = sf._decode_careful
+    sf._decode_careful = lambda k, warn: (used.append(k), decode(k, warn))[1]
     n = sum(1 for _ in sf.records())
     assert n == len(sf)
     assert len(used) < 20, [sf.index.types[k] for k in used]
