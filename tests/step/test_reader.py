@@ -120,6 +120,58 @@ def test_lazy_lookup_by_id_decodes_only_what_is_asked():
         sf.record(6)
 
 
+# Instances with warnings (an unknown backslash: kept, with a warning) among plain ones.
+_WARNED = "#1=A('x');\n#2=(B('C:\\q')C(1));\n#3=A('\\w and \\d');\n#4=A(#1,#3);"
+
+
+def _decoded_by_hand(text):
+    """(every record, the warnings of each read) decoded the old way: nothing kept."""
+    sf = read_step(p21(text), "t.stp")
+    sf.check()
+    start = len(sf.warnings)
+    by_id = {}
+    for r in sf.index.ids:
+        before = len(sf.warnings)
+        by_id[r] = (sf.record(r), sf.warnings[before:])
+    records = list(sf.records())
+    return records, by_id, sf.warnings[start + sum(len(w) for _, w in by_id.values()):]
+
+
+def test_kept_records_are_decoded_once_and_read_as_decoded():
+    sf = read_step(p21(_WARNED), "t.stp")
+    frame_warnings = list(sf.warnings)
+    sf.check(keep=True)
+    assert sf.warnings == frame_warnings  # left to the reads
+    decoded = []
+    sf._decode_careful = lambda k, warn: decoded.append(k)  # nothing is decoded again
+    records, by_id, all_warnings = _decoded_by_hand(_WARNED)
+    for r in sf.index.ids:
+        before = len(sf.warnings)
+        rec = sf.record(r)
+        assert sf.warnings[before:] == by_id[r][1]  # each read adds what its decoding would
+        assert same_value(rec, by_id[r][0]) and sf.record(r) is rec
+    before = len(sf.warnings)
+    assert all(same_value(a, b) for a, b in zip(sf.records(), records))
+    assert sf.warnings[before:] == all_warnings and len(all_warnings) == 3
+    assert decoded == []
+
+
+def test_records_are_not_kept_past_the_warning_limit(monkeypatch):
+    import p105cli.step.reader as reader
+    monkeypatch.setattr(reader, "MAX_WARNINGS", 2)
+    sf = read_step(p21(_WARNED), "t.stp")
+    sf.check(keep=True)
+    assert sf._kept is None  # three warnings could not be replayed exactly
+    assert sf.record(3)["args"] == ["\\w and \\d"]
+
+
+def test_a_syntax_error_keeps_nothing():
+    sf = read_step(p21("#1=A(1);\n#2=A(1 2);"), "t.stp")
+    with pytest.raises(StepSyntaxError):
+        sf.check(keep=True)
+    assert sf._kept is None
+
+
 def test_header_fields_and_other_header_entities():
     header = ("ISO-10303-21;HEADER;FILE_DESCRIPTION(('d1','d2'),'2;1');"
               "FILE_NAME('n','2020-01-01T00:00:00',('a'),('o'),'pp','os','au');"
