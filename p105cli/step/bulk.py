@@ -71,12 +71,19 @@ _ENUM = re.compile(r"\.([A-Za-z_][A-Za-z0-9_]*)\.")
 # Instance heads, each with the ';' that ends the previous instance (the code
 # of a run gets a ';' in front so that the first head has one too).
 _HEAD = re.compile(r";[ \t\r\n]*+#[0-9]++[ \t\r\n]*+=[ \t\r\n]*+[A-Za-z_][A-Za-z0-9_]*+[ \t\r\n]*+\(")
-# Placeholders in the code text: strings, enumerations, heads (after a ';').
-_PH_STRING, _PH_ENUM, _PH_HEAD = "'", "@", "\x01"
+# A complex instance's head with its first part's name, or a later part's name after the
+# ')' that closes the part before it (where nothing else can follow a ')' in valid code).
+_PART = re.compile(r"(;[ \t\r\n]*+#[0-9]++[ \t\r\n]*+=[ \t\r\n]*+\(|\))[ \t\r\n]*+"
+                   r"([A-Za-z_][A-Za-z0-9_]*+)[ \t\r\n]*+\(")
+# Placeholders in the code text: strings, enumerations, heads (after a ';'), part names.
+_PH_STRING, _PH_ENUM, _PH_HEAD, _PH_PART = "'", "@", "\x01", "\x02"
 _HEAD_REPL = ";" + _PH_HEAD + "("
+# A complex instance is a flat list: part name, part arguments, part name, ...
+_COMPLEX_HEAD_REPL = ";" + _PH_HEAD + "(" + _PH_PART + ",("
+_NEXT_PART_REPL = ")," + _PH_PART + ",("
 # Once the placeholders are in, nothing else may be left.
-_BAD_CHAR = re.compile(r"[^0-9eE.+\-#,();$*'@\x01 \t\r\n]")
-_PLACEHOLDERS = re.compile("[@\x01]")
+_BAD_CHAR = re.compile(r"[^0-9eE.+\-#,();$*'@\x01\x02 \t\r\n]")
+_PLACEHOLDERS = re.compile("[@\x01\x02]")
 # Number checks, with literal prefixes so that the searches run fast. On the
 # reversed code: an exponent whose mantissa has no point (``1E5`` is an int
 # then a keyword for Part 21, a float for JSON), and a real with 200 digits
@@ -144,26 +151,12 @@ def decode_all(step_file, warn=None):
 
 
 def _decode_range(sf, a: int, b: int, out: list, warn) -> None:
-    """Append the records of slots a..b-1: complex ones careful, runs of simple ones fast."""
-    types = sf.index.types
-    if None not in types[a:b]:
-        _decode_run(sf, a, b, out, warn)
-        return
-    k = a
-    while k < b:
-        if types[k] is None:
-            out.append(sf._decode_careful(k, warn))
-            k += 1
-            continue
-        j = k
-        while j < b and types[j] is not None:
-            j += 1
-        _decode_run(sf, k, j, out, warn)
-        k = j
+    """Append the records of slots a..b-1."""
+    _decode_run(sf, a, b, out, warn)
 
 
 def _decode_run(sf, a: int, b: int, out: list, warn) -> None:
-    """Append the records of slots a..b-1 (no complex instance among them).
+    """Append the records of slots a..b-1.
 
     A run the fast path refuses is split around the instances it blames
     (those go careful) or, when it cannot tell, halved; the parts are tried
@@ -237,7 +230,7 @@ def _fast(sf, a: int, b: int, warn) -> list:
         raise _Fail([sum(p.count(";") for p in pieces[0:slow:2]) - 1])
 
     # The other placeholders must be new to the code (neither is Part 21).
-    if _PH_ENUM in code or _PH_HEAD in code:
+    if _PH_ENUM in code or _PH_HEAD in code or _PH_PART in code:
         raise _blame(code, [m.start() for m in _PLACEHOLDERS.finditer(code)])
 
     # Enumerations out.
@@ -248,8 +241,15 @@ def _fast(sf, a: int, b: int, warn) -> list:
             enums = parts[1::2]
             code = _PH_ENUM.join(parts[0::2])
 
+    # Part names of complex instances out (their heads with them).
+    part_names = None
+    complex_heads = 0
+    if None in idx.types[a:b]:
+        code, part_names, complex_heads = _part_names(code)
+
     # Heads out.
     code, heads = _HEAD.subn(_HEAD_REPL, code)
+    heads += complex_heads
     # Nothing left but numbers, references, $, *, punctuation and placeholders.
     if _BAD_CHAR.search(code) is not None:
         raise _blame(code, [m.start() for m in _BAD_CHAR.finditer(code)])
@@ -325,6 +325,12 @@ def _fast(sf, a: int, b: int, warn) -> list:
         merged[0::2] = parts
         merged[1::2] = map(_ENUM_JSON.__getitem__, enums)
         code = "".join(merged)
+    if part_names:
+        parts = code.split(_PH_PART)
+        merged = [None] * (2 * len(parts) - 1)
+        merged[0::2] = parts
+        merged[1::2] = ['"' + name + '"' for names in part_names.values() for name in names]
+        code = "".join(merged)
 
     # Strings back in.
     if bodies:
@@ -346,14 +352,64 @@ def _fast(sf, a: int, b: int, warn) -> list:
         del code
         if len(values) != n:
             raise _Fail()
-        records = [{"id": i, "type": t, "args": v}
-                   for i, t, v in zip(idx.ids[a:b], idx.types[a:b], values)]
+        if part_names is None:
+            records = [{"id": i, "type": t, "args": v}
+                       for i, t, v in zip(idx.ids[a:b], idx.types[a:b], values)]
+        else:
+            records = _with_complex(idx, a, b, values, part_names)
     finally:
         if enabled:
             gc.enable()
     if warnings:
         for message, offset in warnings:
             warn(message, offset)
+    return records
+
+
+def _part_names(code: str):
+    """``code`` with the part names of complex instances out (``_PH_PART``): (code,
+    {relative slot: [part names, lower case]} in the order of the code, number of complex
+    heads)."""
+    pieces = _PART.split(code)
+    if len(pieces) == 1:
+        return code, None, 0
+    parts: dict = {}
+    out = [pieces[0]]
+    seen = pieces[0].count(";")  # the instance k (from 0) is after the (k+1)-th ';'
+    heads = 0
+    for j in range(1, len(pieces), 3):
+        if pieces[j][0] == ";":
+            seen += 1
+            heads += 1
+            out.append(_COMPLEX_HEAD_REPL)
+        else:
+            out.append(_NEXT_PART_REPL)
+        parts.setdefault(seen - 1, []).append(pieces[j + 1].lower())
+        rest = pieces[j + 2]
+        out.append(rest)
+        seen += rest.count(";")
+    return "".join(out), parts, heads
+
+
+def _with_complex(idx, a: int, b: int, values: list, parts: dict) -> list:
+    """The records of slots a..b-1, complex ones from their flat lists; _Fail for an
+    instance whose part names are not where parts of a complex instance are."""
+    records = []
+    bad = []
+    for rel, (i, t, v) in enumerate(zip(idx.ids[a:b], idx.types[a:b], values)):
+        names = parts.get(rel)
+        if t is not None:
+            if names is not None:
+                bad.append(rel)
+            records.append({"id": i, "type": t, "args": v})
+            continue
+        if (names is None or len(v) != 2 * len(names) or v[0::2] != names
+                or any(type(x) is not list for x in v[1::2])):
+            bad.append(rel)
+            continue
+        records.append({"id": i, "complex": [{"type": n, "args": x} for n, x in zip(names, v[1::2])]})
+    if bad:
+        raise _Fail(bad)
     return records
 
 

@@ -179,6 +179,10 @@ VALID = {
     "near the nesting limit": "#1=A(" + "(" * 195 + "1" + ")" * 195 + ");",
     "typed parameters": "#1=A(LENGTH_MEASURE(5.),(B(1),C((2))),D('x'),E($));\n#2=F(G(H(.T.)));",
     "complex": "#1=(A(1)B('x',#2)C());\n#2=( NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) LENGTH_UNIT() );",
+    "complex in a run": "#1=A(1);\n#2=(B((#1,#3))\nC('a)b(c',(1.5,-2.),.T.) D ( $ ) E());\n#3=F(#2);\n"
+                        "#4=(g(1)h(+2));\n#5=A(2);",
+    "complex with typed parameters": "#1=(A(LENGTH_MEASURE(1.))B());\n#2=(C((D(1)))E(2));",
+    "complex with comments": "#1=(A(1)/*c*/B(2));\n#2=(/*c*/C(3));",
     "comments": "/* before */#1=A(1,/* in ; it's */2);/* between ' ; */\n#2 /*x*/ = B(3);\n#3=C/*y*/(4);",
     "whitespace": "#1 = A ( 1 , 2. , ( #3 , $ ) ) ;\r\n\t#2\t=\tB\t(\t'x'\t)\t;\n#3=C(\n1,\n2\n);",
     "user defined": "#1=!MY_ENTITY(1,'a');\n#2=A(!B(1));",
@@ -221,9 +225,15 @@ def test_simple_instances_take_the_fast_path():
 
 def test_unusual_instances_go_careful():
     lines = ["#1=A(1);", "#2=(B(1)C(2));", "#3=A(LENGTH_MEASURE(1.));", "#4=A(1,/*c*/2);",
-             '#5=A("0F");', "#6=!X(1);", "#7=A(007);", "#8=A(1.E+300);", "#9=A(1);"]
+             '#5=A("0F");', "#6=!X(1);", "#7=A(007);", "#8=A(1.E+300);", "#9=A(1);",
+             "#10=(B(C(1))D());"]
     used = careful_slots(p21("\n".join(lines)))
-    assert used == list(range(1, 8)), used
+    assert used == [*range(2, 8), 9], used  # the complex instance #2 is fast, #10 has a typed parameter
+
+
+def test_complex_instances_take_the_fast_path():
+    text = p21(VALID["complex in a run"] + "\n" + VALID["complex"].replace("#1", "#11").replace("#2", "#12"))
+    assert careful_slots(text) == []
 
 
 def test_comments_between_instances_take_the_fast_path():
@@ -293,6 +303,16 @@ MALFORMED = {
     "non-ascii in code": "#1=A(1,é);",
     "typed parameter two values": "#1=A(B(1,2));",
     "complex empty": "#1=();",
+    "complex part in a list": "#1=(A((1)B(2)));",
+    "complex parts with a comma": "#1=(A(1),B(2));",
+    "complex string after a part": "#1=(A(1)'x');",
+    "complex value after a part": "#1=(A(1)2);",
+    "complex part not closed": "#1=(A(1)B(2);",
+    "complex closed twice": "#1=(A(1)B(2)));",
+    "complex part without arguments": "#1=(A(1)B);",
+    "part name after a list": "#1=A((1)B(2));",
+    "simple then part": "#1=A(1)B(2);",
+    "complex nested": "#1=((A(1)));",
     "semicolon in list": "#1=A(1;2);",
     "garbage after head": "#1=A B(1);",
 }
