@@ -8,15 +8,20 @@ instances at once into JSON text with operations that run in C
 are identical to the careful path's: same values, same int / float types,
 -0.0 kept, same warnings.
 
-A run of simple instances ``#id = NAME(...);`` (at most CHUNK, never across
-two DATA sections; comments between instances blanked out) becomes JSON:
+A run of instances ``#id = NAME(...);`` and ``#id = (A(...) B(...));`` (at
+most CHUNK, never across two DATA sections; comments between instances
+blanked out) becomes JSON:
 
 1. string literals are split out (one regular expression) and a
    placeholder put in their place; bodies without backslash, quote or line
    break go back verbatim as JSON strings, the others are decoded by
    ``lexer.decode_string`` (with the same offsets, hence the same warnings
    and errors) and re-encoded;
-2. enumerations ``.NAME.`` are split out the same way;
+2. enumerations ``.NAME.`` are split out the same way, and so are the part
+   names of complex instances (``#id = (A(`` and ``) B(``, where nothing
+   else may follow a ``)``): a complex instance becomes the flat list
+   ``["a", [...], "b", [...]]``, and a record only if its elements at that
+   level are exactly its part names and argument lists;
 3. each instance head (the ``;`` ending the previous instance, then
    ``#id = NAME (``) becomes one placeholder; ids and types come from the
    index;
@@ -32,7 +37,7 @@ two DATA sections; comments between instances blanked out) becomes JSON:
 
 Anything outside that subset goes to the careful path
 (``StepFile._decode_careful``), instance by instance and in file order:
-complex instances, typed parameters, comments inside an instance,
+typed parameters, comments inside an instance,
 binaries, user-defined entity names, positive exponents of 100 or more,
 mantissas of 200 digits or more, nesting of MAX_NESTING - 10 or more,
 strings the careful path refuses, and instances whose JSON the parser
