@@ -83,6 +83,7 @@ class Population:
         self._closure: dict = {}  # entity name -> frozenset(types)
         self._layouts: dict = {}
         self._by_type = None
+        self._extents: dict = {}  # (entity, subtypes) -> ids, in file order
         self._backrefs = None
 
     # ---------------------------------------------------------------- basics
@@ -181,12 +182,14 @@ class Population:
         return entity.lower() in self.types_of(instance_id)
 
     def _type_slots(self) -> tuple:
+        """The type index: slots of the simple instances by entity name, and slots of the
+        complex ones by their full type set (each complex record decoded once)."""
         if self._by_type is None:
             by: dict = {}
-            cx: list = []
+            cx: dict = {}
             for k, t in enumerate(self._types):
                 if t is None:
-                    cx.append(k)
+                    cx.setdefault(self._complex_at(k), []).append(k)
                 else:
                     lst = by.get(t)
                     if lst is None:
@@ -199,25 +202,35 @@ class Population:
     def ids_of_type(self, entity: str, subtypes: bool = True) -> list:
         """Ids of the instances of ``entity`` (and of its subtypes unless
         ``subtypes=False``, which keeps instances whose leaf types name it),
-        in file order. Only complex instances are decoded."""
+        in file order: the type extent, from the type index (built on the first
+        call, kept per entity)."""
         entity = entity.lower()
+        key = (entity, subtypes)
+        got = self._extents.get(key)
+        if got is not None:
+            return list(got)
         by, cx = self._type_slots()
         if subtypes and entity in self.schema.entities:
             wanted = {entity, *self.schema.all_subtypes(entity)}
         else:
             wanted = {entity}
         slots: list = []
-        for t in wanted:
-            lst = by.get(t)
-            if lst:
-                slots.extend(lst)
-        for k in cx:
-            types, leaf = self._complex_at(k)
+        if len(wanted) < len(by):
+            for t in wanted:
+                lst = by.get(t)
+                if lst:
+                    slots.extend(lst)
+        else:
+            for t, lst in by.items():
+                if t in wanted:
+                    slots.extend(lst)
+        for (types, leaf), lst in cx.items():
             if entity in (types if subtypes else leaf):
-                slots.append(k)
+                slots.extend(lst)
         slots.sort()
         ids = self._ids
-        return [ids[k] for k in slots]
+        got = self._extents[key] = tuple(ids[k] for k in slots)
+        return list(got)
 
     def instances_of(self, entity: str, subtypes: bool = True) -> list:
         return [self.instance(i) for i in self.ids_of_type(entity, subtypes)]

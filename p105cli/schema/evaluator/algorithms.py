@@ -80,11 +80,15 @@ class Algorithms:
     def _memo_key(self, f, args):
         if not self.memoize:
             return None
+        typed = self.compiled.type_only_parameters(f)
         keys = []
-        for a in args:
+        for i, a in enumerate(args):
             if not _memo_safe(a):
                 return None
-            keys.append(_mkey(a))
+            if i in typed and type(a) is Instance:
+                keys.append(("types", a.types))  # the body sees no more than its types
+            else:
+                keys.append(_mkey(a))
         return (id(f), tuple(keys))
 
     def _algos_of(self, decl, sc):
@@ -110,6 +114,10 @@ class Algorithms:
             sc.decl[lv.name] = lv.type
 
     def _call_algorithm(self, f, args, caller_sc, var_targets=None):
+        if type(f) is Function:
+            v = self._native_call(f, args)
+            if v is not _MISSING:
+                return v
         self._depth += 1
         if self._depth > self.max_depth:
             raise NotEvaluable(f"calls nested deeper than {self.max_depth} (in {f.name})", f.line)
