@@ -84,6 +84,7 @@ class Population:
         self._layouts: dict = {}
         self._by_type = None
         self._extents: dict = {}  # (entity, subtypes) -> ids, in file order
+        self._usedin: dict = {}  # (id, role) -> referring instances
         self._backrefs = None
 
     # ---------------------------------------------------------------- basics
@@ -363,6 +364,15 @@ class Population:
         attribute ``role`` (``'schema.entity.attribute'``; the schema part is
         not checked) or through any attribute when ``role`` is None or ''.
         One entry per (referrer, attribute) pair, like EXPRESS's bag."""
+        key = (instance_id, role or "")
+        got = self._usedin.get(key)
+        if got is None:
+            got = self._usedin[key] = tuple(self._usedin_uncached(instance_id, role))
+        return list(got)
+
+    def _usedin_uncached(self, instance_id: int, role: str | None) -> list:
+        # kept per (instance, role): an assembly's root is used by every occurrence, and
+        # rules ask for its users once per occurrence
         refs = self.backrefs(instance_id)
         if not refs:
             return []

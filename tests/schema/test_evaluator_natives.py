@@ -116,3 +116,24 @@ def test_type_extents_from_the_index_are_a_scan_of_the_population(name):
                     if entity in (pop.types_of(i) if subtypes else pop.leaf_types_of(i))]
             assert pop.ids_of_type(entity, subtypes) == scan, (entity, subtypes)
     assert pop.ids_of_type("named_unit")  # complex unit instances are found
+
+
+def test_aggregate_operators_on_instances_count_occurrences_by_identity():
+    from p105cli.schema import parse_schema
+    from p105cli.schema.evaluator import Agg
+    pop = _pop((EXAMPLES / "four_bar_ap242.stp").read_text())
+    ev = Evaluator(pop)
+    a, b, c = (pop.instance(i) for i in pop.ids_of_type("cartesian_point")[:3])
+
+    def run(text, **variables):
+        s = parse_schema(f"SCHEMA x; CONSTANT k : GENERIC := {text}; END_CONSTANT; END_SCHEMA;")
+        return ev.eval(s.constants["k"].value, variables=variables)
+
+    assert list(run("p - q", p=Agg("bag", [a, b, b, c, b]), q=Agg("bag", [b, b]))) == [a, c, b]
+    assert list(run("p - q", p=Agg("set", [a, b, c]), q=Agg("set", [c, a]))) == [b]
+    assert list(run("p * q", p=Agg("bag", [a, b, b, c]), q=Agg("bag", [b, c, b, b]))) == [b, b, c]
+    assert list(run("p * q", p=Agg("set", [c, b, a]), q=Agg("bag", [a, c]))) == [c, a]
+    assert run("p IN q", p=b, q=Agg("set", [a, c])) is False
+    assert run("p IN q", p=b, q=Agg("set", [a, "b", b])) is True
+    # with a simple value among them the value comparison still applies
+    assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
