@@ -38,6 +38,8 @@ from .model import Schema
 
 __all__ = ["Population", "Instance", "Layout", "Slot"]
 
+_MISSING = object()
+_KEEP_USEDIN = 32  # usedin results kept for instances with at least this many users
 _NO_SLOT = 4095  # back-reference slot code for an argument no attribute describes
 _SLOT_BITS = 12
 
@@ -84,7 +86,8 @@ class Population:
         self._layouts: dict = {}
         self._by_type = None
         self._extents: dict = {}  # (entity, subtypes) -> ids, in file order
-        self._usedin: dict = {}  # (id, role) -> referring instances
+        self._usedin: dict = {}  # (id, role) -> referring instances, for much-used instances
+        self._role_keys: dict = {}
         self._backrefs = None
 
     # ---------------------------------------------------------------- basics
@@ -348,6 +351,12 @@ class Population:
     def role_key(self, role: str):
         """``'schema.entity.attribute'`` (or ``entity.attribute``) -> the
         (declaring entity, attribute) key it designates, or None."""
+        got = self._role_keys.get(role, _MISSING)
+        if got is _MISSING:
+            got = self._role_keys[role] = self._role_key(role)
+        return got
+
+    def _role_key(self, role: str):
         bits = [b for b in role.lower().split(".") if b]
         if len(bits) < 2:
             return None
@@ -367,21 +376,21 @@ class Population:
         key = (instance_id, role or "")
         got = self._usedin.get(key)
         if got is None:
-            got = self._usedin[key] = tuple(self._usedin_uncached(instance_id, role))
+            ids = self.usedin_ids(instance_id, role)
+            got = tuple(self.instance(i) for i in ids)
+            if len(ids) >= _KEEP_USEDIN:
+                # an assembly's root is used by every occurrence, and rules ask for its
+                # users once per occurrence: kept (only for such, to spare memory)
+                self._usedin[key] = got
         return list(got)
 
-    def _usedin_uncached(self, instance_id: int, role: str | None) -> list:
-        # kept per (instance, role): an assembly's root is used by every occurrence, and
-        # rules ask for its users once per occurrence
+    def usedin_ids(self, instance_id: int, role: str | None = None) -> list:
+        """The ids of :meth:`usedin`, without making instances."""
         refs = self.backrefs(instance_id)
         if not refs:
             return []
         if not role:
-            out = []
-            for rid, _slot in refs:
-                if rid in self:
-                    out.append(self.instance(rid))
-            return out
+            return [rid for rid, _slot in refs if rid in self]
         rk = self.role_key(role)
         if rk is None:
             return []
@@ -394,8 +403,25 @@ class Population:
                 continue
             slots = self._layout_of_id(rid).slots
             if slot < len(slots) and slots[slot].key == key:
-                out.append(self.instance(rid))
+                out.append(rid)
         return out
+
+    def peek(self, instance_id: int, attr: str):
+        """The raw value of explicit attribute ``attr`` (as ``Instance.get``), without keeping
+        the decoded record of an instance not yet decoded (a rule that reads one attribute
+        of every point of a B-rep need not hold 200,000 records)."""
+        inst = self._instances.get(instance_id)
+        k = self._slot(instance_id)
+        if (inst is not None and inst._record is not None) or k < 0 or self._types[k] is None:
+            return self.instance(instance_id).get(attr)
+        rec = self._decode(k)
+        args = rec.get("args")
+        lay = self.layout_for(rec["type"])
+        idx = lay.by_name.get(attr.lower())
+        if args is None or not idx:
+            return self.instance(instance_id).get(attr)
+        pos = lay.slots[idx[0]].pos
+        return args[pos] if pos < len(args) else None
 
     def _layout_of_id(self, instance_id: int) -> Layout:
         """The Layout of an instance; simple ones without decoding the record."""

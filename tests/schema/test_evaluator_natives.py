@@ -137,3 +137,48 @@ def test_aggregate_operators_on_instances_count_occurrences_by_identity():
     assert run("p IN q", p=b, q=Agg("set", [a, "b", b])) is True
     # with a simple value among them the value comparison still applies
     assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
+
+
+def _compatible_dimension(pop, **kw):
+    return Evaluator(pop, **kw).global_rule(pop.schema.rules["compatible_dimension"])
+
+
+@needs_b3d
+def test_native_check_geometric_dimension_with_parametric_contexts():
+    # build123d/OCCT files hold 2D parametric contexts: the rule goes through
+    # using_representations for every point and direction
+    text = B3D.read_text()
+    assert "PARAMETRIC_REPRESENTATION_CONTEXT" in text
+    pop = _pop(text)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": True}
+    # a 3D point written with two coordinates in a 3D representation breaks it
+    import re
+    m = re.search(r"^#(\d+) = CARTESIAN_POINT\('',\(([^,]+),([^,]+),([^)]+)\)\);$", text, re.M)
+    assert m
+    broken = text.replace(m.group(0), f"#{m.group(1)} = CARTESIAN_POINT('',({m.group(2)},{m.group(3)}));")
+    pop = _pop(broken)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": False}
+
+
+def test_native_check_geometric_dimension_with_one_dimensionality():
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    pop = _pop(text)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": True}
+    broken = _pop(text.replace("DIRECTION('',(0.,0.,1.));", "DIRECTION('',(0.,1.));", 1))
+    assert _compatible_dimension(broken) == _compatible_dimension(broken, natives=False) == {"wr1": False}
+
+
+def test_peek_reads_an_attribute_as_get_does_without_keeping_the_record():
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    pop, reference = _pop(text), _pop(text)
+    for iid in pop.ids_of_type("cartesian_point") + pop.ids_of_type("direction"):
+        for attr in ("name", "coordinates", "direction_ratios"):
+            try:
+                expected = reference.instance(iid).get(attr)
+            except Exception as err:  # not an attribute of this entity: the same refusal
+                with pytest.raises(type(err)):
+                    pop.peek(iid, attr)
+                continue
+            assert pop.peek(iid, attr) == expected
+            if attr == "name":
+                assert iid not in pop._instances  # nothing kept

@@ -14,6 +14,9 @@ from .values import (
 )
 
 
+MEMO_MAX_AGGREGATE = 1000
+
+
 def _memo_safe(v) -> bool:
     """True for values that cannot be changed after the fact (no in-memory
     entity values inside): plain values, population instances, enumeration
@@ -83,6 +86,8 @@ class Algorithms:
         typed = self.compiled.type_only_parameters(f)
         keys = []
         for i, a in enumerate(args):
+            if type(a) is Agg and len(a) > MEMO_MAX_AGGREGATE:
+                return None  # a whole extent: its key would cost as much as the call
             if not _memo_safe(a):
                 return None
             if i in typed and type(a) is Instance:

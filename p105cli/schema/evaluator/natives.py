@@ -17,6 +17,11 @@ is the EXPRESS function's value, in the same order (its SET unions keep first
 occurrences, and a path check never fires without a cycle). Where a cycle is met the
 interpreter runs the EXPRESS body instead, so the result is always the standard's.
 
+``check_geometric_dimension(capt, dir, grc)`` (AP242, global rule
+``compatible_dimension``) is a loop over every point and direction of the file: the
+same loop here, with the evaluator's own attribute access and comparisons, so that
+UNKNOWN and ``?`` behave as in the EXPRESS body.
+
 A native applies only to a FUNCTION of that name with the expected parameters; any other
 argument (``?``, an in-memory entity value) is left to the interpreter.
 """
@@ -24,8 +29,9 @@ argument (``?``, an in-memory entity value) is left to the interpreter.
 from __future__ import annotations
 
 from ..instance import Instance
+from .builtins import hiindex
 from .scope import _MISSING
-from .values import Agg
+from .values import Agg, _plain
 
 
 class _Cycle(Exception):
@@ -58,12 +64,12 @@ class Natives:
         USEDIN order (``using_items``' QUERY over ``bag_to_set(USEDIN(item, ''))``)."""
         out: list = []
         seen: set = set()
-        for z in self.pop.usedin(iid, None):
-            zid = z.id
+        types_of = self.pop.types_of
+        for zid in self.pop.usedin_ids(iid):
             if zid in seen:
                 continue
             seen.add(zid)
-            types = z.types
+            types = types_of(zid)
             if "representation_item" in types or "founded_item" in types:
                 out.append(zid)
         return out
@@ -75,7 +81,7 @@ class Natives:
         done = memo.get(root)
         if done is not None:
             return done
-        usedin = self.pop.usedin
+        usedin = self.pop.usedin_ids
         stack = [[root, self._item_users(root), 0]]
         on_path = {root}
         while stack:
@@ -98,10 +104,10 @@ class Natives:
             node = frame[0]
             out: list = []
             seen: set = set()
-            for rep in usedin(node, "representation.items"):
-                if rep.id not in seen:
-                    seen.add(rep.id)
-                    out.append(rep.id)
+            for rid in usedin(node, "representation.items"):
+                if rid not in seen:
+                    seen.add(rid)
+                    out.append(rid)
             for u in users:
                 for rid in memo[u]:
                     if rid not in seen:
@@ -113,7 +119,49 @@ class Natives:
         return memo[root]
 
 
+    def _check_geometric_dimension(self, f, args):
+        capt, dirs, grc = (_plain(a) for a in args)
+        functions = self.schema.functions
+        in_contexts = functions.get("geometric_dimensionalities_in_contexts")
+        using = functions.get("using_representations")
+        if (in_contexts is None or using is None
+                or any(type(a) is not Agg for a in (capt, dirs, grc))):
+            return _MISSING
+        globaldim = self._call_algorithm(in_contexts, [grc], None)
+        groups = ((capt, "coordinates"), (dirs, "direction_ratios"))
+        differs = self._compare
+        if differs(">", globaldim, 0) is True:
+            for items, attribute in groups:
+                for x in items:
+                    if differs("<>", self._size_of(x, attribute), globaldim) is True:
+                        return False
+            return True
+        for items, attribute in groups:
+            for x in items:
+                reps = self._call_algorithm(using, [x], None)
+                if type(reps) is not Agg or not reps:
+                    return False  # SIZEOF(reps) > 0 is not TRUE: the ELSE branch
+                n = self._size_of(x, attribute)
+                for rep in reps:
+                    dim = self._attr(self._attr(rep, "context_of_items"), "coordinate_space_dimension",
+                                     "geometric_representation_context")
+                    if differs("<>", n, dim) is True:
+                        return False
+        return True
+
+    def _size_of(self, x, attribute: str):
+        """HIINDEX(x.attribute) for a LIST attribute: the raw list's length when the
+        instance's record holds a list there (read without keeping the record), else as
+        the interpreter evaluates it."""
+        if type(x) is Instance and x.pop is self.pop:
+            raw = self.pop.peek(x.id, attribute)
+            if type(raw) is list:
+                return len(raw)
+        return hiindex(self._attr(x, attribute))
+
+
 #: function name -> (method, number of parameters)
 _NATIVES = {
     "using_representations": (Natives._using_representations, 1),
+    "check_geometric_dimension": (Natives._check_geometric_dimension, 3),
 }
