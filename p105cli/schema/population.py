@@ -39,7 +39,7 @@ from .model import Schema
 __all__ = ["Population", "Instance", "Layout", "Slot"]
 
 _MISSING = object()
-_KEEP_USEDIN = 32  # usedin results kept for instances with at least this many users
+_KEEP_USEDIN = 32  # usedin results kept for instances referred to at least this often
 _NO_SLOT = 4095  # back-reference slot code for an argument no attribute describes
 _SLOT_BITS = 12
 
@@ -376,11 +376,11 @@ class Population:
         key = (instance_id, role or "")
         got = self._usedin.get(key)
         if got is None:
-            ids = self.usedin_ids(instance_id, role)
-            got = tuple(self.instance(i) for i in ids)
-            if len(ids) >= _KEEP_USEDIN:
-                # an assembly's root is used by every occurrence, and rules ask for its
-                # users once per occurrence: kept (only for such, to spare memory)
+            got = tuple(self.instance(i) for i in self.usedin_ids(instance_id, role))
+            if self._backrefs is not None and len(self._backrefs.get(instance_id, ())) >= _KEEP_USEDIN:
+                # an assembly's root is used by every occurrence, and rules ask who uses it
+                # (in one role or another) once per occurrence: kept for such instances only,
+                # to spare memory
                 self._usedin[key] = got
         return list(got)
 

@@ -135,6 +135,9 @@ def test_aggregate_operators_on_instances_count_occurrences_by_identity():
     assert list(run("p * q", p=Agg("set", [c, b, a]), q=Agg("bag", [a, c]))) == [c, a]
     assert run("p IN q", p=b, q=Agg("set", [a, c])) is False
     assert run("p IN q", p=b, q=Agg("set", [a, "b", b])) is True
+    assert list(run("p + q", p=Agg("set", [a, b]), q=Agg("set", [b, c, a]))) == [a, b, c]
+    assert list(run("p + q", p=Agg("set", [a, b]), q=c)) == [a, b, c]
+    assert list(run("p + q", p=Agg("set", [a, b]), q=b)) == [a, b]
     # with a simple value among them the value comparison still applies
     assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
 
