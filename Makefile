@@ -80,7 +80,8 @@ bench-parse: $(STAMP)
 	$(PY) bench/bench_parse.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-parse.md
 
 bench-validate: $(STAMP)
-	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --markdown docs/benchmarks-validate.md
+	$(PY) bench/bench_validate.py --corpus $(SHARED)/corpus/big --external $(SHARED)/external \
+		--markdown docs/benchmarks-validate.md
 
 bench-graph: $(STAMP)
 	$(PY) bench/bench_graph.py --markdown docs/benchmarks-graph.md

@@ -10,9 +10,11 @@ What is checked, in order:
 * the schema's own WHERE, UNIQUE and global rules, evaluated from the
   EXPRESS text (``schema/evaluator/``) on the *kinematic closure*: every
   instance of a Part 105 entity and every instance it references,
-  transitively. Geometry that no kinematic entity uses is checked for
-  conformance but its rules are not evaluated (a 200k-instance CAD file
-  would take minutes, and is not what this tool gates). A rule the
+  transitively, stopping at shape representations (:data:`SHAPE_BOUNDARY`).
+  Geometry that no kinematic entity uses is checked for conformance but its
+  rules are not evaluated (a 200k-instance CAD file would take minutes, and
+  is not what this tool gates); global rules run over the population's type
+  extents. A rule the
   evaluator cannot evaluate is one ``SCH-NOT-EVALUATED`` note, never a
   silent skip; the summary counts rules evaluated / applicable;
 * ``KIN-*`` checks the schema cannot express (``kinematics.py``).
@@ -51,20 +53,36 @@ def kinematic_entity_names() -> frozenset:
     return KINEMATIC_ENTITIES
 
 
+#: Where the kinematic closure stops: a shape representation (a link's geometry, the
+#: B-rep of a part) is a boundary. The kinematics reach it through the link-to-shape
+#: association, but its items are the part's geometry, not mechanism data: its own
+#: instances are checked for conformance like every other, its rules and what only it
+#: references are not pulled in (a 10-plate four-bar would otherwise drag 8,000 B-rep
+#: instances through the rules, issue 11).
+SHAPE_BOUNDARY = "shape_representation"
+
+
 def kinematic_closure(pop) -> list[int]:
-    """Ids of the kinematic instances and everything they reference, in id order."""
+    """Ids of the kinematic instances and everything they reference, transitively, in id
+    order; a shape representation that is not itself kinematic is not entered (nor kept:
+    :data:`SHAPE_BOUNDARY`)."""
     schema = pop.schema
+    kinematic = kinematic_entity_names()
     seeds: set[int] = set()
-    for name in kinematic_entity_names():
+    for name in kinematic:
         if name in schema.entities:
             seeds.update(pop.ids_of_type(name, subtypes=True))
     seen = set(seeds)
     todo = list(seeds)
     while todo:
         for r in record_refs(pop.instance(todo.pop()).record):
-            if r not in seen and r in pop:  # a dangling reference leads nowhere
-                seen.add(r)
-                todo.append(r)
+            if r in seen or r not in pop:  # a dangling reference leads nowhere
+                continue
+            seen.add(r)
+            types = pop.types_of(r)
+            if SHAPE_BOUNDARY in types and types.isdisjoint(kinematic):
+                continue
+            todo.append(r)
     return sorted(seen)
 
 

@@ -38,6 +38,8 @@ from .model import Schema
 
 __all__ = ["Population", "Instance", "Layout", "Slot"]
 
+_MISSING = object()
+_KEEP_USEDIN = 32  # usedin results kept for instances referred to at least this often
 _NO_SLOT = 4095  # back-reference slot code for an argument no attribute describes
 _SLOT_BITS = 12
 
@@ -83,6 +85,9 @@ class Population:
         self._closure: dict = {}  # entity name -> frozenset(types)
         self._layouts: dict = {}
         self._by_type = None
+        self._extents: dict = {}  # (entity, subtypes) -> ids, in file order
+        self._usedin: dict = {}  # (id, role) -> referring instances, for much-used instances
+        self._role_keys: dict = {}
         self._backrefs = None
 
     # ---------------------------------------------------------------- basics
@@ -181,12 +186,14 @@ class Population:
         return entity.lower() in self.types_of(instance_id)
 
     def _type_slots(self) -> tuple:
+        """The type index: slots of the simple instances by entity name, and slots of the
+        complex ones by their full type set (each complex record decoded once)."""
         if self._by_type is None:
             by: dict = {}
-            cx: list = []
+            cx: dict = {}
             for k, t in enumerate(self._types):
                 if t is None:
-                    cx.append(k)
+                    cx.setdefault(self._complex_at(k), []).append(k)
                 else:
                     lst = by.get(t)
                     if lst is None:
@@ -199,25 +206,35 @@ class Population:
     def ids_of_type(self, entity: str, subtypes: bool = True) -> list:
         """Ids of the instances of ``entity`` (and of its subtypes unless
         ``subtypes=False``, which keeps instances whose leaf types name it),
-        in file order. Only complex instances are decoded."""
+        in file order: the type extent, from the type index (built on the first
+        call, kept per entity)."""
         entity = entity.lower()
+        key = (entity, subtypes)
+        got = self._extents.get(key)
+        if got is not None:
+            return list(got)
         by, cx = self._type_slots()
         if subtypes and entity in self.schema.entities:
             wanted = {entity, *self.schema.all_subtypes(entity)}
         else:
             wanted = {entity}
         slots: list = []
-        for t in wanted:
-            lst = by.get(t)
-            if lst:
-                slots.extend(lst)
-        for k in cx:
-            types, leaf = self._complex_at(k)
+        if len(wanted) < len(by):
+            for t in wanted:
+                lst = by.get(t)
+                if lst:
+                    slots.extend(lst)
+        else:
+            for t, lst in by.items():
+                if t in wanted:
+                    slots.extend(lst)
+        for (types, leaf), lst in cx.items():
             if entity in (types if subtypes else leaf):
-                slots.append(k)
+                slots.extend(lst)
         slots.sort()
         ids = self._ids
-        return [ids[k] for k in slots]
+        got = self._extents[key] = tuple(ids[k] for k in slots)
+        return list(got)
 
     def instances_of(self, entity: str, subtypes: bool = True) -> list:
         return [self.instance(i) for i in self.ids_of_type(entity, subtypes)]
@@ -334,6 +351,12 @@ class Population:
     def role_key(self, role: str):
         """``'schema.entity.attribute'`` (or ``entity.attribute``) -> the
         (declaring entity, attribute) key it designates, or None."""
+        got = self._role_keys.get(role, _MISSING)
+        if got is _MISSING:
+            got = self._role_keys[role] = self._role_key(role)
+        return got
+
+    def _role_key(self, role: str):
         bits = [b for b in role.lower().split(".") if b]
         if len(bits) < 2:
             return None
@@ -350,15 +373,24 @@ class Population:
         attribute ``role`` (``'schema.entity.attribute'``; the schema part is
         not checked) or through any attribute when ``role`` is None or ''.
         One entry per (referrer, attribute) pair, like EXPRESS's bag."""
+        key = (instance_id, role or "")
+        got = self._usedin.get(key)
+        if got is None:
+            got = tuple(self.instance(i) for i in self.usedin_ids(instance_id, role))
+            if self._backrefs is not None and len(self._backrefs.get(instance_id, ())) >= _KEEP_USEDIN:
+                # an assembly's root is used by every occurrence, and rules ask who uses it
+                # (in one role or another) once per occurrence: kept for such instances only,
+                # to spare memory
+                self._usedin[key] = got
+        return list(got)
+
+    def usedin_ids(self, instance_id: int, role: str | None = None) -> list:
+        """The ids of :meth:`usedin`, without making instances."""
         refs = self.backrefs(instance_id)
         if not refs:
             return []
         if not role:
-            out = []
-            for rid, _slot in refs:
-                if rid in self:
-                    out.append(self.instance(rid))
-            return out
+            return [rid for rid, _slot in refs if rid in self]
         rk = self.role_key(role)
         if rk is None:
             return []
@@ -371,8 +403,25 @@ class Population:
                 continue
             slots = self._layout_of_id(rid).slots
             if slot < len(slots) and slots[slot].key == key:
-                out.append(self.instance(rid))
+                out.append(rid)
         return out
+
+    def peek(self, instance_id: int, attr: str):
+        """The raw value of explicit attribute ``attr`` (as ``Instance.get``), without keeping
+        the decoded record of an instance not yet decoded (a rule that reads one attribute
+        of every point of a B-rep need not hold 200,000 records)."""
+        inst = self._instances.get(instance_id)
+        k = self._slot(instance_id)
+        if (inst is not None and inst._record is not None) or k < 0 or self._types[k] is None:
+            return self.instance(instance_id).get(attr)
+        rec = self._decode(k)
+        args = rec.get("args")
+        lay = self.layout_for(rec["type"])
+        idx = lay.by_name.get(attr.lower())
+        if args is None or not idx:
+            return self.instance(instance_id).get(attr)
+        pos = lay.slots[idx[0]].pos
+        return args[pos] if pos < len(args) else None
 
     def _layout_of_id(self, instance_id: int) -> Layout:
         """The Layout of an instance; simple ones without decoding the record."""

@@ -16,6 +16,7 @@ is reported does not depend on whether the records were kept.
 from __future__ import annotations
 
 import re
+from array import array
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
@@ -24,6 +25,7 @@ from .index import _SKIP, InstanceIndex, _SKIP_RE, index_data_section
 from .lexer import Tokens, parse_instance_body, parse_parameters
 
 MAGIC = "ISO-10303-21"
+_NEWLINE = re.compile("\n")
 MAX_WARNINGS = 1000  # kept per file; the rest are counted in StepFile.warnings_dropped
 _FRAME_WORD = re.compile(r"(ISO-10303-21|END-ISO-10303-21|HEADER|DATA|ANCHOR|REFERENCE|SIGNATURE|ENDSEC)\b", re.I)
 # Raw body of a section kept verbatim, up to its ENDSEC; strings and comments may hold anything.
@@ -261,8 +263,22 @@ class StepFile:
         return [k for k, t in enumerate(self.index.types) if t in wanted]
 
     def line_col(self, offset: int) -> tuple[int, int]:
-        err = StepSyntaxError("", offset, self.text)
-        return err.line, err.column
+        """(line, column), both from 1, of a character offset: a binary search in the line
+        starts, indexed on the first call (each diagnostic located in O(log n), not by a
+        scan of the text before it)."""
+        starts = self.__dict__.get("_line_starts")
+        if starts is None:
+            starts = self.__dict__["_line_starts"] = line_starts(self.text)
+        off = max(0, min(offset, len(self.text)))
+        line = bisect_right(starts, off)
+        return line, off - starts[line - 1] + 1
+
+
+def line_starts(text: str) -> array:
+    """Offsets of the first character of every line of ``text`` (lines end at '\\n')."""
+    starts = array("q", [0])
+    starts.extend(m.end() for m in _NEWLINE.finditer(text))
+    return starts
 
 
 def _attach(err: StepError, text: str, source: str) -> None:

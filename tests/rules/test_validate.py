@@ -8,7 +8,7 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from conftest import CORPUS, EXAMPLES, ROOT, p21
+from conftest import CORPUS, EXAMPLES, ROOT, SHARED, p21
 
 DATA = ROOT / "tests" / "data"
 GENERATED = sorted((DATA / "corpus").glob("*.stp"))
@@ -186,3 +186,85 @@ def test_raw_8bit_bytes_are_a_p21_encoding_warning_per_line_with_line_and_column
     assert r.returncode == 0
     (line,) = r.stderr.decode().splitlines()
     assert line.startswith(f"p105: warning: {path}:{header_lines + 2}:21: not UTF-8: 3 raw 8-bit bytes")
+
+
+# ---------------------------------------------------------------- the closure's shape boundary
+HEAVY10 = SHARED / "external" / "build123d" / "b3d_four_bar_heavy10.stp"
+needs_heavy10 = pytest.mark.skipif(not HEAVY10.exists(), reason="../shared/external/build123d not present")
+
+
+def _validate_text(text: str, name: str):
+    from p105cli.rules.validate import validate_document
+    from p105cli.step import read_step
+    return validate_document(read_step(text, name), name)
+
+
+def _rule_counts(result) -> dict:
+    counts: dict = {}
+    for d in result.diagnostics:
+        counts[d.rule] = counts.get(d.rule, 0) + 1
+    return counts
+
+
+@needs_heavy10
+def test_the_closure_stops_at_the_link_shapes_and_keeps_the_kinematics():
+    from p105cli.rules.validate import kinematic_closure
+    from p105cli.schema.population import Population
+    from p105cli.step import read_step
+    from p105cli.step.values import record_refs
+    pop = Population(read_step(HEAVY10.read_text(), "h"))
+    closure = set(kinematic_closure(pop))
+    shapes = set(pop.ids_of_type("advanced_brep_shape_representation"))
+    faces = set(pop.ids_of_type("advanced_face"))
+    assert len(shapes) == 4 and shapes <= closure  # the boundary instances are in
+    assert not faces & closure  # the B-rep behind them is not
+    assert set(pop.ids_of_type("kinematic_link_representation_association")) <= closure
+    assert 2009 not in closure  # a point of the ground plate's B-rep
+    # the pairs' frames are kinematic data, though geometry items too
+    frames = {r for p in pop.ids_of_type("kinematic_pair") for r in record_refs(pop.instance(p).record)}
+    assert frames & set(pop.ids_of_type("axis2_placement_3d")) and frames <= closure
+
+
+@needs_heavy10
+def test_heavy10_findings_are_the_ones_of_the_whole_closure(monkeypatch):
+    # A second method: the same file validated with the closure left unbounded (the whole
+    # B-rep pulled in, as before issue 11) gives the same findings; the boundary drops none.
+    import p105cli.rules.validate as validate
+
+    def findings():
+        result = _validate_text(HEAVY10.read_text(), "h.stp")
+        return sorted((d.rule, d.entity, d.message) for d in result.diagnostics)
+
+    bounded = findings()
+    monkeypatch.setattr(validate, "SHAPE_BOUNDARY", "no_entity_has_this_type")
+    assert findings() == bounded
+    assert _rule_counts(_validate_text(HEAVY10.read_text(), "h.stp")) == {
+        "SCH-DERIVED-CONFLICT": 4, "SCH-DERIVED-EXPLICIT": 5, "SCH-TYPE": 8,
+        "SCH-ap242_application_protocol_definition_required.wr1": 1,
+        "SCH-kinematic_link_representation_association.wr1": 4,
+        "SCH-kinematic_property_mechanism_representation.wr1": 1}
+
+
+@needs_heavy10
+def test_shape_defects_behind_the_boundary_are_still_found():
+    good = "#2009 = CARTESIAN_POINT('',(39.381818181818,"
+    text = HEAVY10.read_text()
+    assert good in text
+    # a point of a plate's B-rep (outside the kinematic closure) with a string coordinate
+    result = _validate_text(text.replace(good, "#2009 = CARTESIAN_POINT('',('x',"), "h.stp")
+    assert any(d.rule == "SCH-TYPE" and d.entity == 2009 for d in result.diagnostics)
+
+
+@needs_heavy10
+def test_a_kinematic_defect_behind_the_link_association_is_still_found():
+    # a joint connecting a link to itself (kinematic_joint.wr1) in a file with plate B-reps
+    lines = HEAVY10.read_text().splitlines()
+    joint = next(i for i, l in enumerate(lines) if "= KINEMATIC_JOINT(" in l)
+    head, args = lines[joint].split("(", 1)
+    parts = args.rstrip(");").split(",")
+    parts[-1] = parts[-2]
+    lines[joint] = f"{head}({','.join(parts)});"
+    result = _validate_text("\n".join(lines) + "\n", "h.stp")
+    joint_id = int(lines[joint].split("=")[0].strip()[1:])
+    assert any(d.rule == "SCH-kinematic_joint.wr1" and d.entity == joint_id for d in result.diagnostics)
+    assert _rule_counts(result)["SCH-kinematic_link_representation_association.wr1"] == 4

@@ -304,3 +304,14 @@ def test_json_writer_document_shape():
     lines = out.getvalue().splitlines()
     assert lines[0].startswith('{"format":"p105/1","header":{')
     assert lines[1:] == ['"data":[', '{"id":1,"type":"a","args":[1.0]}', "]}"]
+
+
+def test_line_col_is_the_count_of_line_breaks_before_the_offset():
+    from p105cli.step import read_step
+    text = ("ISO-10303-21;\r\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\n"
+            "FILE_SCHEMA(('X'));\nENDSEC;\nDATA;\n\n#1=A('a\nb');\n#2=B(#1);\nENDSEC;\nEND-ISO-10303-21;")
+    sf = read_step(text, "t.stp")
+    for off in [-3, *range(len(text) + 1), len(text) + 5]:
+        o = max(0, min(off, len(text)))
+        expected = (text.count("\n", 0, o) + 1, o - (text.rfind("\n", 0, o) + 1) + 1)
+        assert sf.line_col(off) == expected, off

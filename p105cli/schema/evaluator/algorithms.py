@@ -14,6 +14,9 @@ from .values import (
 )
 
 
+MEMO_MAX_AGGREGATE = 1000
+
+
 def _memo_safe(v) -> bool:
     """True for values that cannot be changed after the fact (no in-memory
     entity values inside): plain values, population instances, enumeration
@@ -80,11 +83,17 @@ class Algorithms:
     def _memo_key(self, f, args):
         if not self.memoize:
             return None
+        typed = self.compiled.type_only_parameters(f)
         keys = []
-        for a in args:
+        for i, a in enumerate(args):
+            if type(a) is Agg and len(a) > MEMO_MAX_AGGREGATE:
+                return None  # a whole extent: its key would cost as much as the call
             if not _memo_safe(a):
                 return None
-            keys.append(_mkey(a))
+            if i in typed and type(a) is Instance:
+                keys.append(("types", a.types))  # the body sees no more than its types
+            else:
+                keys.append(_mkey(a))
         return (id(f), tuple(keys))
 
     def _algos_of(self, decl, sc):
@@ -110,6 +119,10 @@ class Algorithms:
             sc.decl[lv.name] = lv.type
 
     def _call_algorithm(self, f, args, caller_sc, var_targets=None):
+        if type(f) is Function:
+            v = self._native_call(f, args)
+            if v is not _MISSING:
+                return v
         self._depth += 1
         if self._depth > self.max_depth:
             raise NotEvaluable(f"calls nested deeper than {self.max_depth} (in {f.name})", f.line)

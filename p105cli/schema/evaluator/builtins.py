@@ -105,6 +105,11 @@ def _b_lobound(ev, node, sc):
 
 def _b_hiindex(ev, node, sc):
     (v,) = _args(ev, node, sc, 1)
+    return hiindex(v)
+
+
+def hiindex(v):
+    """HIINDEX of a value: ``?`` for anything but an aggregate."""
     v = _plain(v)
     if type(v) is not Agg:
         return _IND

@@ -13,27 +13,35 @@ from ..model import (
 )
 from .algorithms import Algorithms
 from .attributes import Attributes
+from .compiled import compiled_for
 from .expressions import Expressions
+from .natives import Natives
 from .operators import Operators
 from .schema_types import SchemaTypes
 from .scope import MAX_CALL_DEPTH, _Scope
 from .values import Agg, NotEvaluable, _IND, _plain
 
 
-class Evaluator(SchemaTypes, Attributes, Expressions, Operators, Algorithms):
+class Evaluator(SchemaTypes, Attributes, Expressions, Operators, Algorithms, Natives):
     """Evaluates EXPRESS over one Population (see the package docstring).
 
     ``population``: the ``Population`` whose instances the rules run over;
     one Evaluator per population keeps the caches (attribute access, memos
-    of function calls) for all rules run over it."""
+    of function calls) for all rules run over it. ``memoize=False`` turns
+    off the memos of calls and of type-only QUERY conditions
+    (``compiled.py``), ``natives=False`` the Python versions of schema
+    functions (``natives.py``): the plain interpreter, for tests."""
 
     def __init__(self, population, max_depth: int = MAX_CALL_DEPTH,
-                 literal_indeterminate_test: bool = False, memoize: bool = True):
+                 literal_indeterminate_test: bool = False, memoize: bool = True,
+                 natives: bool = True):
         self.pop = population
         self.literal_indeterminate_test = literal_indeterminate_test
         self.memoize = memoize
+        self.natives = natives
         self._memo: dict = {}
         self.schema = population.schema
+        self.compiled = compiled_for(self.schema)  # type-only facts, once per schema
         self.prefix = population.prefix
         self.max_depth = max_depth
         self._depth = 0
@@ -47,6 +55,7 @@ class Evaluator(SchemaTypes, Attributes, Expressions, Operators, Algorithms):
         self._enum_items = None
         self._constants: dict = {}
         self._derive_active: set = set()
+        self._reps_memo: dict = {}  # natives: item id -> ids of the representations using it
         self.anomalies: list = []  # (message) attribute look-ups that found nothing
         d = {}
         for cls, meth in (

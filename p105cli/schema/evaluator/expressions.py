@@ -222,9 +222,24 @@ class Expressions:
             raise NotEvaluable(f"QUERY over {_tname(agg)}", node.line)
         inner = _Scope(sc)
         var = node.variable
+        cond = node.condition
         out = []
-        for x in agg:
-            inner.vars[var] = x
-            if _l3(self.ev(node.condition, inner)) is True:
-                out.append(x)
+        if self.memoize and len(agg) > 1 and self.compiled.query_type_only(node, sc.algos):
+            by_types: dict = {}  # the condition sees an instance's types only (compiled.py)
+            for x in agg:
+                if type(x) is Instance:
+                    keep = by_types.get(x.types)
+                    if keep is None:
+                        inner.vars[var] = x
+                        keep = by_types[x.types] = _l3(self.ev(cond, inner)) is True
+                else:
+                    inner.vars[var] = x
+                    keep = _l3(self.ev(cond, inner)) is True
+                if keep:
+                    out.append(x)
+        else:
+            for x in agg:
+                inner.vars[var] = x
+                if _l3(self.ev(cond, inner)) is True:
+                    out.append(x)
         return Agg(agg.kind if agg.kind != "array" else "list", out)

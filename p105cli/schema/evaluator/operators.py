@@ -175,10 +175,9 @@ class Operators:
                 return _plain(e) in agg
             return None
         if _is_entity(e):
-            for x in agg:
-                if x is e:
-                    return True
-            return False
+            # instance equality of entities is identity (neither Instance nor EntityValue
+            # defines __eq__, and no other value equals one): the list's own search
+            return e in agg
         pe = _plain(e)
         if type(pe) is str:
             unknown = False
@@ -276,6 +275,16 @@ class Operators:
         if op == "-":
             if ta is not Agg:
                 raise NotEvaluable("element - aggregate", node.line)
+            drop = _entity_counts(b if tb is Agg else [b])
+            if drop is not None:  # entities only: remove the first occurrences by identity
+                out = []
+                for y in a:
+                    n = drop.get(id(y))
+                    if n:
+                        drop[id(y)] = n - 1
+                    else:
+                        out.append(y)
+                return Agg(a.kind, out)
             out = list(a)
             for x in (b if tb is Agg else [b]):
                 for j, y in enumerate(out):
@@ -285,6 +294,17 @@ class Operators:
             return Agg(a.kind, out)
         if op == "*":
             if ta is Agg and tb is Agg:
+                kind = "set" if "set" in (a.kind, b.kind) else "bag"
+                left = _entity_counts(a)
+                have = _entity_counts(b) if left is not None else None
+                if have is not None:  # entities only: match occurrences by identity
+                    out = []
+                    for x in a:
+                        n = have.get(id(x))
+                        if n:
+                            have[id(x)] = n - 1
+                            out.append(x)
+                    return Agg(kind, self._dedupe(out) if kind == "set" else out)
                 rest = list(b)
                 out = []
                 for x in a:
@@ -308,3 +328,14 @@ class Operators:
             parts[k] = {n: _copy(x) for n, x in v.items()}
         types, leaf = self.pop.resolve_types(parts)
         return EntityValue(parts, types, leaf)
+
+
+def _entity_counts(items):
+    """{id: occurrences} of ``items`` when every one is an entity (instance equality is then
+    identity), else None."""
+    counts: dict = {}
+    for x in items:
+        if not _is_entity(x):
+            return None
+        counts[id(x)] = counts.get(id(x), 0) + 1
+    return counts

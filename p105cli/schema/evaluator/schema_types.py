@@ -8,6 +8,8 @@ from __future__ import annotations
 from ..instance import Instance
 from ..model import AggregateType, EnumerationType, Literal, NamedType, SelectType, SimpleType
 from .scope import _Scope
+
+_ONLY_INSTANCES = {Instance}
 from .values import (
     Agg, BinaryValue, EntityValue, EnumValue, NotEvaluable, TypedValue, _IND, _LOGICAL_ITEMS,
     _bits_of_p21_binary, _copy, _plain, _simple_names,
@@ -267,6 +269,11 @@ class SchemaTypes:
         return v
 
     def _dedupe(self, items) -> list:
+        if items and set(map(type, items)) == _ONLY_INSTANCES and len(set(map(id, items))) == len(items):
+            # distinct population instances (instance equality is identity; a copy of an
+            # instance is itself): nothing to drop, found without a Python loop, since
+            # `result := result + x` in a REPEAT dedupes the whole set on every assignment
+            return list(items)
         out = []
         seen = set()
         for x in items:

@@ -219,7 +219,9 @@ def _union_kind(a, b):
 
 def _copy(v):
     if type(v) is Agg:
-        return Agg(v.kind, [_copy(x) for x in v], v.lo, v.dtypes, v.bounds)
+        if Agg in set(map(type, v)):
+            return Agg(v.kind, [_copy(x) for x in v], v.lo, v.dtypes, v.bounds)
+        return Agg(v.kind, v, v.lo, v.dtypes, v.bounds)  # flat: the list's own copy
     return v
 
 

@@ -1,0 +1,167 @@
+"""Schema functions run in Python: walks the interpreter would do in time exponential in
+the depth of the data.
+
+``using_representations(item)`` (ISO 10303-43, in both long forms) climbs from an item
+through every representation item or founded item that uses it, along every path
+(``using_items`` keeps only the current path to stop cycles), and collects the
+representations holding any of them. In a B-rep a point is reached from each of its
+vertices' edges, loops, faces and shells by many paths: interpreted, one call costs
+milliseconds, and ``compatible_dimension`` and ``representation_item.wr1`` call it for
+every point and direction. Here the representations of each item are computed once,
+from those of its users:
+
+    reps(x) = distinct(direct(x) ++ reps(u1) ++ reps(u2) ++ ...)
+
+for the users u1, u2, ... of x in USEDIN order. On data without reference cycles this
+is the EXPRESS function's value, in the same order (its SET unions keep first
+occurrences, and a path check never fires without a cycle). Where a cycle is met the
+interpreter runs the EXPRESS body instead, so the result is always the standard's.
+
+``check_geometric_dimension(capt, dir, grc)`` (AP242, global rule
+``compatible_dimension``) is a loop over every point and direction of the file: the
+same loop here, with the evaluator's own attribute access and comparisons, so that
+UNKNOWN and ``?`` behave as in the EXPRESS body.
+
+A native applies only to a FUNCTION of that name with the expected parameters; any other
+argument (``?``, an in-memory entity value) is left to the interpreter.
+"""
+
+from __future__ import annotations
+
+from ..instance import Instance
+from .builtins import hiindex
+from .scope import _MISSING
+from .values import Agg, _plain
+
+
+class _Cycle(Exception):
+    """The users of an item lead back to it: the native gives way to the EXPRESS body."""
+
+
+class Natives:
+    """Python versions of schema functions (an ``Evaluator`` mixin)."""
+
+    def _native_call(self, f, args):
+        """The native result of FUNCTION ``f`` on ``args``, or ``_MISSING`` to interpret it."""
+        native = _NATIVES.get(f.name) if self.natives else None
+        if native is None or len(f.parameters) != native[1] or len(args) != native[1]:
+            return _MISSING
+        return native[0](self, f, args)
+
+    def _using_representations(self, f, args):
+        item = args[0]
+        if type(item) is not Instance or item.pop is not self.pop:
+            return _MISSING
+        try:
+            ids = self._representations_of(item.id)
+        except _Cycle:
+            return _MISSING
+        instance = self.pop.instance
+        return self._coerce(Agg("set", [instance(i) for i in ids]), f.return_type)
+
+    def _item_users(self, iid: int) -> list:
+        """Ids of the representation items and founded items using ``#iid``, distinct, in
+        USEDIN order (``using_items``' QUERY over ``bag_to_set(USEDIN(item, ''))``)."""
+        out: list = []
+        seen: set = set()
+        types_of = self.pop.types_of
+        for zid in self.pop.usedin_ids(iid):
+            if zid in seen:
+                continue
+            seen.add(zid)
+            types = types_of(zid)
+            if "representation_item" in types or "founded_item" in types:
+                out.append(zid)
+        return out
+
+    def _representations_of(self, root: int) -> tuple:
+        """Ids of the representations using ``#root`` directly or through items (see the
+        module docstring); memoised per item for the evaluator's lifetime."""
+        memo = self._reps_memo
+        done = memo.get(root)
+        if done is not None:
+            return done
+        usedin = self.pop.usedin_ids
+        stack = [[root, self._item_users(root), 0]]
+        on_path = {root}
+        while stack:
+            frame = stack[-1]
+            users = frame[1]
+            descended = False
+            while frame[2] < len(users):
+                u = users[frame[2]]
+                frame[2] += 1
+                if u in memo:
+                    continue
+                if u in on_path:
+                    raise _Cycle(u)
+                stack.append([u, self._item_users(u), 0])
+                on_path.add(u)
+                descended = True
+                break
+            if descended:
+                continue
+            node = frame[0]
+            out: list = []
+            seen: set = set()
+            for rid in usedin(node, "representation.items"):
+                if rid not in seen:
+                    seen.add(rid)
+                    out.append(rid)
+            for u in users:
+                for rid in memo[u]:
+                    if rid not in seen:
+                        seen.add(rid)
+                        out.append(rid)
+            memo[node] = tuple(out)
+            on_path.discard(node)
+            stack.pop()
+        return memo[root]
+
+
+    def _check_geometric_dimension(self, f, args):
+        capt, dirs, grc = (_plain(a) for a in args)
+        functions = self.schema.functions
+        in_contexts = functions.get("geometric_dimensionalities_in_contexts")
+        using = functions.get("using_representations")
+        if (in_contexts is None or using is None
+                or any(type(a) is not Agg for a in (capt, dirs, grc))):
+            return _MISSING
+        globaldim = self._call_algorithm(in_contexts, [grc], None)
+        groups = ((capt, "coordinates"), (dirs, "direction_ratios"))
+        differs = self._compare
+        if differs(">", globaldim, 0) is True:
+            for items, attribute in groups:
+                for x in items:
+                    if differs("<>", self._size_of(x, attribute), globaldim) is True:
+                        return False
+            return True
+        for items, attribute in groups:
+            for x in items:
+                reps = self._call_algorithm(using, [x], None)
+                if type(reps) is not Agg or not reps:
+                    return False  # SIZEOF(reps) > 0 is not TRUE: the ELSE branch
+                n = self._size_of(x, attribute)
+                for rep in reps:
+                    dim = self._attr(self._attr(rep, "context_of_items"), "coordinate_space_dimension",
+                                     "geometric_representation_context")
+                    if differs("<>", n, dim) is True:
+                        return False
+        return True
+
+    def _size_of(self, x, attribute: str):
+        """HIINDEX(x.attribute) for a LIST attribute: the raw list's length when the
+        instance's record holds a list there (read without keeping the record), else as
+        the interpreter evaluates it."""
+        if type(x) is Instance and x.pop is self.pop:
+            raw = self.pop.peek(x.id, attribute)
+            if type(raw) is list:
+                return len(raw)
+        return hiindex(self._attr(x, attribute))
+
+
+#: function name -> (method, number of parameters)
+_NATIVES = {
+    "using_representations": (Natives._using_representations, 1),
+    "check_geometric_dimension": (Natives._check_geometric_dimension, 3),
+}

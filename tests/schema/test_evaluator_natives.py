@@ -1,0 +1,187 @@
+"""The evaluator's speed-ups give the plain interpreter's answers: the Python
+``using_representations`` (natives.py), the type-only facts compiled once per schema
+(compiled.py) and the population's type index."""
+
+from __future__ import annotations
+
+import pytest
+
+from conftest import EXAMPLES, SHARED
+from p105cli.schema.evaluator import Evaluator
+from p105cli.schema.evaluator.compiled import compiled_for
+from p105cli.schema.population import Population
+from p105cli.schema.profiles import get_profile
+from p105cli.step import read_step
+
+B3D = SHARED / "external" / "build123d" / "b3d_revolute.stp"
+needs_b3d = pytest.mark.skipif(not B3D.exists(), reason="../shared/external/build123d not present")
+
+AP242_HEADER = ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
+                "FILE_NAME('t.stp','',(''),(''),'','','');\n"
+                "FILE_SCHEMA(('AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }'));\n"
+                "ENDSEC;\n")
+
+
+def _pop(text: str) -> Population:
+    return Population(read_step(text, "t.stp"))
+
+
+def _ids(agg) -> list:
+    return [x.id for x in agg]
+
+
+@needs_b3d
+def test_native_using_representations_is_the_express_function_in_the_same_order():
+    pop = _pop(B3D.read_text())
+    fast, plain = Evaluator(pop), Evaluator(pop, natives=False)
+    items = pop.ids_of_type("cartesian_point") + pop.ids_of_type("direction") + pop.ids_of_type("edge_curve")
+    assert len(items) > 200
+    several = 0
+    for iid in items[::3]:
+        inst = pop.instance(iid)
+        got = fast.call("using_representations", inst)
+        assert _ids(got) == _ids(plain.call("using_representations", inst)), iid
+        assert got.kind == "set"
+        several += len(got) > 1
+    assert several  # some items are used by more than one representation
+
+
+def test_a_reference_cycle_among_items_is_left_to_the_interpreter():
+    # #1 and #2 use each other; both sit in representation #3 (and #2 in #5)
+    text = AP242_HEADER + """DATA;
+#1=GEOMETRIC_CURVE_SET('a',(#2));
+#2=GEOMETRIC_CURVE_SET('b',(#1));
+#3=REPRESENTATION('r',(#1),#4);
+#4=REPRESENTATION_CONTEXT('c','t');
+#5=REPRESENTATION('s',(#2),#4);
+#6=CARTESIAN_POINT('p',(0.,0.,0.));
+#7=GEOMETRIC_CURVE_SET('d',(#6));
+#8=REPRESENTATION('u',(#7),#4);
+ENDSEC;
+END-ISO-10303-21;
+"""
+    pop = _pop(text)
+    fast, plain = Evaluator(pop), Evaluator(pop, natives=False)
+    for iid in (1, 2, 6, 7):
+        inst = pop.instance(iid)
+        assert _ids(fast.call("using_representations", inst)) == \
+            _ids(plain.call("using_representations", inst)), iid
+    assert sorted(_ids(fast.call("using_representations", pop.instance(1)))) == [3, 5]
+    assert _ids(fast.call("using_representations", pop.instance(6))) == [8]
+
+
+def test_type_only_parameters_and_queries_are_found_conservatively():
+    schema = get_profile("ap242").schema
+    compiled = compiled_for(schema)
+    assert compiled is compiled_for(schema)  # once per schema
+    assert compiled.type_only_parameters(schema.functions["type_check_function"]) == frozenset({0})
+    # these look at their argument's attributes or users, not only its type
+    assert compiled.type_only_parameters(schema.functions["dimension_of"]) == frozenset()
+    assert compiled.type_only_parameters(schema.functions["using_representations"]) == frozenset()
+    rule = schema.rules["subtype_exclusiveness_representation_item"]
+    query = rule.where[0].expr.left.args[0]
+    assert compiled.query_type_only(query, None)
+
+
+@pytest.mark.parametrize("name", ["four_bar_ap242.stp", "slider_crank_p105_1996_ap214.stp"])
+def test_global_rules_give_the_plain_interpreters_results(name):
+    pop = _pop((EXAMPLES / name).read_text())
+    fast = Evaluator(pop)
+    plain = Evaluator(pop, memoize=False, natives=False)
+    rules = pop.schema.rules
+    checked = 0
+    for rname in sorted(rules):
+        if not any(pop.ids_of_type(e) for e in rules[rname].applies_to):
+            continue
+        assert fast.global_rule(rules[rname]) == plain.global_rule(rules[rname]), rname
+        checked += 1
+    assert checked > 10
+
+
+def test_where_rules_of_every_instance_give_the_plain_interpreters_results():
+    pop = _pop((EXAMPLES / "four_bar_ap242.stp").read_text())
+    fast = Evaluator(pop)
+    plain = Evaluator(pop, memoize=False, natives=False)
+    for inst in pop.instances():
+        assert fast.check_instance(inst) == plain.check_instance(inst), inst
+
+
+@pytest.mark.parametrize("name", ["four_bar_ap242.stp", "slider_crank_p105_1996_ap214.stp"])
+def test_type_extents_from_the_index_are_a_scan_of_the_population(name):
+    pop = _pop((EXAMPLES / name).read_text())
+    for entity in ("representation_item", "cartesian_point", "kinematic_pair", "named_unit",
+                   "representation", "si_unit", "no_such_entity"):
+        for subtypes in (True, False):
+            scan = [i for i in pop.ids()
+                    if entity in (pop.types_of(i) if subtypes else pop.leaf_types_of(i))]
+            assert pop.ids_of_type(entity, subtypes) == scan, (entity, subtypes)
+    assert pop.ids_of_type("named_unit")  # complex unit instances are found
+
+
+def test_aggregate_operators_on_instances_count_occurrences_by_identity():
+    from p105cli.schema import parse_schema
+    from p105cli.schema.evaluator import Agg
+    pop = _pop((EXAMPLES / "four_bar_ap242.stp").read_text())
+    ev = Evaluator(pop)
+    a, b, c = (pop.instance(i) for i in pop.ids_of_type("cartesian_point")[:3])
+
+    def run(text, **variables):
+        s = parse_schema(f"SCHEMA x; CONSTANT k : GENERIC := {text}; END_CONSTANT; END_SCHEMA;")
+        return ev.eval(s.constants["k"].value, variables=variables)
+
+    assert list(run("p - q", p=Agg("bag", [a, b, b, c, b]), q=Agg("bag", [b, b]))) == [a, c, b]
+    assert list(run("p - q", p=Agg("set", [a, b, c]), q=Agg("set", [c, a]))) == [b]
+    assert list(run("p * q", p=Agg("bag", [a, b, b, c]), q=Agg("bag", [b, c, b, b]))) == [b, b, c]
+    assert list(run("p * q", p=Agg("set", [c, b, a]), q=Agg("bag", [a, c]))) == [c, a]
+    assert run("p IN q", p=b, q=Agg("set", [a, c])) is False
+    assert run("p IN q", p=b, q=Agg("set", [a, "b", b])) is True
+    assert list(run("p + q", p=Agg("set", [a, b]), q=Agg("set", [b, c, a]))) == [a, b, c]
+    assert list(run("p + q", p=Agg("set", [a, b]), q=c)) == [a, b, c]
+    assert list(run("p + q", p=Agg("set", [a, b]), q=b)) == [a, b]
+    # with a simple value among them the value comparison still applies
+    assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
+
+
+def _compatible_dimension(pop, **kw):
+    return Evaluator(pop, **kw).global_rule(pop.schema.rules["compatible_dimension"])
+
+
+@needs_b3d
+def test_native_check_geometric_dimension_with_parametric_contexts():
+    # build123d/OCCT files hold 2D parametric contexts: the rule goes through
+    # using_representations for every point and direction
+    text = B3D.read_text()
+    assert "PARAMETRIC_REPRESENTATION_CONTEXT" in text
+    pop = _pop(text)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": True}
+    # a 3D point written with two coordinates in a 3D representation breaks it
+    import re
+    m = re.search(r"^#(\d+) = CARTESIAN_POINT\('',\(([^,]+),([^,]+),([^)]+)\)\);$", text, re.M)
+    assert m
+    broken = text.replace(m.group(0), f"#{m.group(1)} = CARTESIAN_POINT('',({m.group(2)},{m.group(3)}));")
+    pop = _pop(broken)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": False}
+
+
+def test_native_check_geometric_dimension_with_one_dimensionality():
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    pop = _pop(text)
+    assert _compatible_dimension(pop) == _compatible_dimension(pop, natives=False) == {"wr1": True}
+    broken = _pop(text.replace("DIRECTION('',(0.,0.,1.));", "DIRECTION('',(0.,1.));", 1))
+    assert _compatible_dimension(broken) == _compatible_dimension(broken, natives=False) == {"wr1": False}
+
+
+def test_peek_reads_an_attribute_as_get_does_without_keeping_the_record():
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    pop, reference = _pop(text), _pop(text)
+    for iid in pop.ids_of_type("cartesian_point") + pop.ids_of_type("direction"):
+        for attr in ("name", "coordinates", "direction_ratios"):
+            try:
+                expected = reference.instance(iid).get(attr)
+            except Exception as err:  # not an attribute of this entity: the same refusal
+                with pytest.raises(type(err)):
+                    pop.peek(iid, attr)
+                continue
+            assert pop.peek(iid, attr) == expected
+            if attr == "name":
+                assert iid not in pop._instances  # nothing kept
