@@ -172,6 +172,14 @@ class Progress:
             self._bar.stop()
 
 
+def report_deviations(doc) -> None:
+    """Print, once each, the departures from the schema that the lenient model reader read
+    anyway (``p105: warning: FILE: #id: ...``; p105cli.part105.model_file)."""
+    from p105cli.part105.model_file import take_deviations
+    for message in take_deviations(doc):
+        diag("warning", f"{getattr(doc, 'source', None) or '<stdin>'}: {message}")
+
+
 def report_warnings(doc) -> None:
     """Print the reader's warnings and dangling references of ``doc`` on stderr."""
     from p105cli.step.checks import dangling_references

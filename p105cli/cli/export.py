@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -18,12 +18,20 @@ def _convert(doc, schema: str, occt_compat: bool):
 
     with naming_source(doc):
         model = ModelFile.of(doc)  # one population: the mechanism is read and converted from it
-        mechanisms = read_mechanisms(model)
+        try:
+            mechanisms = read_mechanisms(model)
+        finally:
+            report_deviations(doc)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
-    with naming_source(doc):  # the conversion reads the source too: its errors name the file
-        out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
+    from p105cli.part105.convert import RepairError
+    try:
+        with naming_source(doc):  # the conversion reads the source too: its errors name the file
+            out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
+    except RepairError as err:  # a conversion that would not conform: nothing is written
+        diag("error", f"{doc.source}: {err}")
+        raise click.exceptions.Exit(ExitCode.FINDINGS) from None
     for message in diagnostics:
         diag("warning", f"{doc.source}: {message}")
     return out

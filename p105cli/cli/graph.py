@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, open_output
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, open_output, report_deviations
 from .inputs import load_document
 from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_option, output_option, input_schema, \
     to_option, tol_option
@@ -71,7 +71,10 @@ def _mechanisms(doc, schema, name):
     except UnknownSchemaError as err:
         raise InputError(f"{doc.source}: {err}") from None
     model = ModelFile.of(doc, schema)  # the command's one population
-    mechs = read_mechanisms(model)
+    try:
+        mechs = read_mechanisms(model)
+    finally:
+        report_deviations(doc)
     if name is not None:
         mechs = [m for m in mechs if m.name == name]
         if not mechs:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings
+from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings
 from .inputs import load_document, naming_source, source_of
 from .options import count_option, input_argument, output_option, schema_option, step_option, to_option
 
@@ -70,6 +70,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
                                   profile=schema)
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
+    report_deviations(doc)
     for inst, msg in result.skipped:
         diag("warning", f"{source_of(doc)}: #{inst}: {msg}")
     try:

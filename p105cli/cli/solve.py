@@ -13,7 +13,8 @@ from types import SimpleNamespace
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_warnings, stderr_is_terminal
+from .contract import (EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings,
+                       stderr_is_terminal)
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
@@ -143,7 +144,10 @@ def _read_model(model, schema, mechanism):
     report_warnings(doc)
     with naming_source(doc):
         mf = ModelFile.of(doc, schema)
-        return mf, read_mechanism(mf, name=mechanism)
+        try:
+            return mf, read_mechanism(mf, name=mechanism)
+        finally:
+            report_deviations(doc)
 
 
 def _program(model, mech, count, step):

@@ -320,18 +320,34 @@ def _read_ap242(mf: ModelFile, m) -> MechanismLayout:
             ml.description = mf.string(pdk, "description")
             ml.ids["product_definition_kinematics"] = pdk
         break
-    for prr in mf.refs(m, "items", types=("pair_representation_relationship",)):
-        p = mf.ref(prr, "transformation_operator", types=("kinematic_pair",))
+    for item in mf.refs(m, "items"):
+        if mf.is_a(item, "kinematic_pair"):  # build123d's AP242 writer
+            p, prr, hints = item, None, (None, None)
+            mf.deviation(p, f"{mf.label(p)} listed directly among the items of mechanism_representation #{m}; "
+                         "AP242 links pairs to a mechanism through pair_representation_relationship "
+                         "(read anyway)")
+        elif not mf.is_a(item, "pair_representation_relationship"):
+            raise model_error(m, f"items of {mf.label(m)} refers to #{item} ({mf.label(item)}), which is no "
+                              "pair_representation_relationship")
+        else:
+            prr = item
+            p = mf.ref(prr, "transformation_operator", types=("kinematic_pair",))
+            hints = (mf.ref(prr, "rep_1", types=("kinematic_link_representation",)),
+                     mf.ref(prr, "rep_2", types=("kinematic_link_representation",)))
         j = mf.ref(p, "joint", types=("kinematic_joint",))
         l1 = mf.ref(j, "edge_start", types=("kinematic_link",))
         l2 = mf.ref(j, "edge_end", types=("kinematic_link",))
-        rep1 = mf.ref(prr, "rep_1", types=("kinematic_link_representation",))
-        rep2 = mf.ref(prr, "rep_2", types=("kinematic_link_representation",))
-        pl = _pair(mf, ml, p, j, l1, l2, hints=(rep1, rep2))
+        pl = _pair(mf, ml, p, j, l1, l2, hints=hints)
         pl.relationship = prr
         _add_pair(ml, pl)
     if topo is not None and mf.is_a(topo, "kinematic_topology_structure"):
-        for j in mf.refs(topo, "items"):  # links of joints without a pair
+        items = mf.refs(topo, "items")
+        links = [x for x in items if mf.is_a(x, "kinematic_link")]
+        if links:  # build123d's AP242 writer: the links of the joints, listed beside them
+            mf.deviation(topo, f"kinematic_topology_structure lists the kinematic_link{'s' * (len(links) > 1)} "
+                         f"{', '.join(f'#{x}' for x in links)} among its items; AP242 allows only "
+                         "kinematic_joint there, the links are the joints' ends (read as the joints' ends)")
+        for j in items:  # links of joints without a pair
             if mf.is_a(j, "kinematic_joint"):
                 for a in ("edge_start", "edge_end"):
                     ml.links.setdefault(mf.ref(j, a, types=("kinematic_link",)), None)

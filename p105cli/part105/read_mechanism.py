@@ -94,8 +94,8 @@ from ..schema.values import number as _num
 from ..step.errors import ModelError
 from . import geometry
 from . import layout as lay
-from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
-    range_on_values
+from .catalogue import FREEDOM_FLAGS, GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, \
+    pair_kind_of_entity, range_on_values
 from .model_file import ContextScale, ModelFile, model_error
 from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
@@ -155,6 +155,8 @@ class _Reader:
             ids["actuator"] = pl_.actuator
         if pl_.relationship is not None:
             ids["relationship"] = pl_.relationship
+        if self.layout == "ap242":
+            self._explicit_derived(p, kind, entity)
         params = self._params(p, kind, s1)
         for key, f, sc in (("su_1", f1, s1), ("su_2", f2, s2)):
             if d.is_a(f, "su_parameters"):  # kept so that a writer can give the frame back as written
@@ -212,6 +214,37 @@ class _Reader:
         shown = "+".join(names) or "kinematic_pair"
         raise model_error(p, f"{shown}: this pair type is not supported by the kinematics model "
                      "(see docs/model.md)")
+
+    def _explicit_derived(self, p, kind, entity) -> None:
+        """Lenient reading: the freedom flags and the transformation's name of an AP242 pair,
+        which AP242 derives (``*``), written explicitly (Open CASCADE's and build123d's writers
+        do). The pair moves as its entity says; one deviation names what the file writes, and
+        says plainly where it contradicts the standard."""
+        d = self.d
+        written = []
+        conflicts = []
+        derived = FREEDOM_FLAGS.get(kind)
+        if derived is not None:
+            raw = [d.get(p, f"low_order_kinematic_pair.{f}", None) for f in _FLAG_NAMES]
+            if any(v is not None and not (type(v) is dict and v.get("derived")) for v in raw):
+                written.append("the freedom flags t_x .. r_z")
+                says = tuple(int(_is_true(v)) for v in raw)
+                if says != tuple(derived):
+                    conflicts.append(_motion_conflict(says, tuple(derived), entity))
+        name = d.get(p, "item_defined_transformation.name", None)
+        if isinstance(name, str):
+            written.append("item_defined_transformation.name")
+            own = d.string(p, "representation_item.name")
+            if name != own:
+                conflicts.append(f"the file names its transformation {name!r}, AP242 derives the pair's own "
+                                 f"name {own!r}")
+        if written:
+            if conflicts:
+                d.deviation(p, f"{d.label(p)} writes {' and '.join(written)} where AP242 derives them, and "
+                            f"contradicts the derivation: {'; '.join(conflicts)} (read as AP242 derives)")
+            else:
+                d.deviation(p, f"{d.label(p)} writes {' and '.join(written)} where AP242 derives them (*); "
+                            "the values agree with the derivation (read anyway)")
 
     def _params(self, p, kind, s: ContextScale) -> dict:
         d = self.d
@@ -403,6 +436,26 @@ class _Reader:
         return Mechanism(ml.name, links, pairs, names[ml.base], T_world_base=T_world_base,
                          initial=initial, units=units, profile=self.profile,
                          description=ml.description, ids=dict(ml.ids))
+
+
+_FLAG_NAMES = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
+
+
+def _motion_words(flags: tuple) -> str:
+    """Freedom flags (t_x .. r_z as 0/1) in words: "translation along z, rotation about z"."""
+    t = [a for a, f in zip("xyz", flags[:3]) if f]
+    r = [a for a, f in zip("xyz", flags[3:]) if f]
+    parts = ([f"translation along {' and '.join(t)}"] if t else []) + \
+        ([f"rotation about {' and '.join(r)}"] if r else [])
+    return ", ".join(parts) or "no motion"
+
+
+def _motion_conflict(says: tuple, derived: tuple, entity: str) -> str:
+    """What the file's flags say against what AP242 derives, in the domain's words."""
+    if sum(says) == sum(derived) == 1 and not any(says[3:]) and not any(derived[3:]):
+        return (f"file says the slider moves along {'xyz'[says.index(1)]}; AP242 derives "
+                f"{'xyz'[derived.index(1)]} for a {entity}")
+    return f"file says the pair allows {_motion_words(says)}; AP242 derives {_motion_words(derived)} for a {entity}"
 
 
 # --------------------------------------------------------------------------- entry points
