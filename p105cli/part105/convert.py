@@ -219,6 +219,11 @@ class Conversion:
         self._contexts()
 
         write_kinematics(k, self.diags)
+        if self.mech.pairs and not k.pairs:
+            kinds = ", ".join(sorted({p.kind for p in self.mech.pairs}))
+            raise RepairError(f"#{self.mech.ids.get('mechanism')}: none of the pairs of mechanism {self.mech.name!r} "
+                              f"({kinds}) can be written in {self.profile}: the mechanism would have no joint, "
+                              "which its schema does not allow; not converted")
         self._sequences(k, self.ids, self.consumed)
         k.finish()
         if getattr(k, "loops_written", False):

@@ -367,6 +367,13 @@ def _read_ap242(mf: ModelFile, m) -> MechanismLayout:
         named = [s for s in states if "initial" in mf.string(s, "name").lower()]
         st = (named or states)[0]
         ml.ids["initial_state"] = st
+        ctx = mf.ref_value(st, "context_of_items")
+        if ctx is not None:  # Open CASCADE's and build123d's writers
+            own = mf.ref_value(m, "context_of_items")
+            said = ("the same" if ctx == own else
+                    f"another one: the mechanism's #{own} is used, as AP242 derives")
+            mf.deviation(st, f"mechanism_state_representation writes its context #{ctx}, which AP242 derives "
+                         f"from its mechanism #{m} (*); it is {said} (read anyway)")
         for v in mf.refs(st, "items"):
             if not mf.is_a(v, "pair_value"):
                 continue
@@ -422,10 +429,28 @@ def _finish(mf: ModelFile, ml: MechanismLayout) -> MechanismLayout:
             reps = link_reps(mf, link)
             ml.links[link] = reps[0] if reps else None
     ml.link_names = unique_names({link: link_name(mf, link, ml.links[link]) for link in ml.link_order})
+    for link in ml.link_order:
+        _shape_context(mf, ml.links[link])
     names = unique_names({p.id: pair_name(mf, p.id, p.joint_name) for p in ml.pairs})
     for p in ml.pairs:
         p.name = names[p.id]
     return ml
+
+
+def _shape_context(mf: ModelFile, rep) -> None:
+    """Lenient reading: a link representation associated with a shape in another context
+    (build123d and Open CASCADE write one context for the whole mechanism) is one deviation;
+    the link's frames are read in its own representation's context."""
+    ctx = mf.ref_value(rep, "context_of_items") if rep is not None else None
+    for klra in mf.usedin(rep, "kinematic_link_representation_association.rep_1"):
+        shape = mf.ref_value(klra, "rep_2")
+        shape_ctx = mf.ref_value(shape, "context_of_items") if shape in mf else None
+        if (ctx is not None and shape_ctx is not None and shape_ctx != ctx
+                and not mf.is_a(klra, "representation_relationship_with_transformation")):
+            mf.deviation(klra, f"kinematic_link_representation_association relates link representation #{rep} "
+                         f"(context #{ctx}) to shape #{shape} (context #{shape_ctx}); it wants one context for "
+                         "both (its WR1): the link's frames are read in its representation's context #"
+                         f"{ctx} (read anyway)")
 
 
 # --------------------------------------------------------------------------- looking names up
