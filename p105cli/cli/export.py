@@ -68,6 +68,13 @@ def export(to, schema, occt_compat, input, output, stream):
     leaves actuation, loops and sequences out (each reported), so the file
     loads there with an empty check list. Without it the output is the
     standard form, which p105 validate passes.
+
+    With --schema a file read with departures from its schema (warned as
+    graph and solve warn them) is repaired: the converted mechanism is
+    written in the standard form, each link representation in its shape's
+    context and in a context of its own, the 1996 ground in one of its own
+    (each repair a warning). What cannot be repaired is exit 1 naming it,
+    and nothing is written.
     """
     if stream and to != "json":
         raise click.UsageError("--stream applies to --to json only")

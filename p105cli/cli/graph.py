@@ -36,6 +36,13 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     of the loop-closure Jacobian at the initial state, with the redundant
     constraints and the joints that carry them. Exit 1 when the mobility
     cannot be computed (a pair whose motion is not available).
+
+    Files written the way build123d and Open CASCADE write AP242 kinematics
+    (pairs directly among the mechanism's items, links among the topology's,
+    explicit values where AP242 derives them, one shared context) are read
+    anyway, with one warning per departure naming its #id and the rule it
+    breaks; where an explicit value contradicts AP242, AP242 wins and the
+    warning says so. validate reports them as errors.
     """
     check_tol(tol)  # inf too: it was an internal error in the analysis
     if enrich and to in ("dot", "graphml", "mermaid"):

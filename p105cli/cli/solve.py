@@ -89,6 +89,13 @@ def solve(**options):
     dead centre or a configuration that cannot be assembled is reported on
     that configuration (status), never silently. Inverse: --path with
     --target-link. Exit 1 when any configuration is not ok.
+
+    Files written the way build123d and Open CASCADE write AP242 kinematics
+    (pairs directly among the mechanism's items, links among the topology's,
+    explicit values where AP242 derives them, one shared context) are read
+    anyway, with one warning per departure naming its #id and the rule it
+    breaks; where an explicit value contradicts AP242, AP242 wins and the
+    warning says so. validate reports them as errors.
     """
     o = SimpleNamespace(**options)
     o.to_given = o.to is not None

@@ -408,7 +408,8 @@ class Conversion:
         link's representation: the same rule). Each repair is one diagnostic."""
         k, ids = self.k, self.ids
         owner: dict = {}  # context id -> the link whose representation is in it
-        for ln in self.mech.links:
+        # links with a shape first: their context is fixed by it, the others can take a copy
+        for ln in sorted(self.mech.links, key=lambda ln: k.link_shape.get(ln.name) is None):
             rep = ids["link_rep"].get(ln.name)
             ctx = ref_id(k.link_ctx.get(ln.name))
             shape = ref_id(k.link_shape.get(ln.name))
