@@ -42,6 +42,16 @@ Exit status:
   130  interrupted (Ctrl-C)
   141  stdout closed early (e.g. piped into head); nothing is printed"""
 
+#: The epilog of the commands that read mechanisms leniently (part105.model_file: deviations).
+READ_LENIENTLY_TEXT = """Files written the way build123d and Open CASCADE write AP242 kinematics
+(pairs directly among the mechanism's items, links among the topology's,
+explicit values where AP242 derives them, one shared context) are read
+anyway, with one warning per departure naming its #id and the rule it
+breaks; where an explicit value contradicts AP242, AP242 wins and the
+warning says so. validate reports them as errors.
+
+"""
+
 
 class InputError(click.ClickException):
     """Unreadable or malformed input: exit 2 with the message as given."""

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings)
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -37,7 +38,7 @@ def _convert(doc, schema: str, occt_compat: bool):
     return out
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
 @output_schema(["ap214", "p105", "ap242"],
                help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "

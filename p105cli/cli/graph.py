@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, open_output, report_deviations
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, Settings, diag, open_output,
+                       report_deviations)
 from .inputs import load_document
 from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_option, output_option, input_schema, \
     to_option, tol_option
@@ -13,7 +14,7 @@ from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_opt
 GRAPH_FORMATS = ("json", "dot", "graphml", "mermaid")
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @to_option(GRAPH_FORMATS + ("p21",),
            help="Output format: the analysis as json (default), dot, graphml or mermaid; with --enrich "
                 "the model as p21 or json (default: the input's format).")
@@ -36,13 +37,6 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     of the loop-closure Jacobian at the initial state, with the redundant
     constraints and the joints that carry them. Exit 1 when the mobility
     cannot be computed (a pair whose motion is not available).
-
-    Files written the way build123d and Open CASCADE write AP242 kinematics
-    (pairs directly among the mechanism's items, links among the topology's,
-    explicit values where AP242 derives them, one shared context) are read
-    anyway, with one warning per departure naming its #id and the rule it
-    breaks; where an explicit value contradicts AP242, AP242 wins and the
-    warning says so. validate reports them as errors.
     """
     check_tol(tol)  # inf too: it was an internal error in the analysis
     if enrich and to in ("dot", "graphml", "mermaid"):

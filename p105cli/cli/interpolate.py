@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings)
 from .inputs import load_document, naming_source, source_of
 from .options import count_option, input_argument, output_option, schema_option, step_option, to_option
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @input_argument
 @click.option("--what", type=click.Choice(["all", "paths", "configurations"]), default="all", show_default=True,
               help="Sample the kinematic paths, the configuration interpolation sequences, or both.")

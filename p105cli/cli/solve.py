@@ -13,8 +13,8 @@ from types import SimpleNamespace
 
 import click
 
-from .contract import (EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_deviations, report_warnings,
-                       stderr_is_terminal)
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings, stderr_is_terminal)
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
@@ -24,7 +24,7 @@ from .solve_scene import load_scene, model_scene, run_scene, scene_only
 FORMATS = ["model", "jsonl", "csv"]
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @model_argument
 @click.option("--values", "values", metavar="FILE|-", default=None,
               help="Driven pair values, one configuration per row: CSV with a header of pair names "
@@ -89,13 +89,6 @@ def solve(**options):
     dead centre or a configuration that cannot be assembled is reported on
     that configuration (status), never silently. Inverse: --path with
     --target-link. Exit 1 when any configuration is not ok.
-
-    Files written the way build123d and Open CASCADE write AP242 kinematics
-    (pairs directly among the mechanism's items, links among the topology's,
-    explicit values where AP242 derives them, one shared context) are read
-    anyway, with one warning per departure naming its #id and the rule it
-    breaks; where an explicit value contradicts AP242, AP242 wins and the
-    warning says so. validate reports them as errors.
     """
     o = SimpleNamespace(**options)
     o.to_given = o.to is not None
