@@ -415,7 +415,7 @@ class Conversion:
             shape = ref_id(k.link_shape.get(ln.name))
             shape_ctx = self.mf.ref(shape, "context_of_items") if shape is not None else None
             if shape_ctx is not None and shape_ctx != ctx:
-                if not self._same_units(shape_ctx, ctx):
+                if ctx is not None and not self._same_units(shape_ctx, ctx):
                     raise RepairError(f"#{rep}: link {ln.name!r}: its representation's context #{ctx} and "
                                       f"the context #{shape_ctx} of its shape #{shape} have other units; "
                                       "kinematic_link_representation_association.wr1 wants one context for "

@@ -30,7 +30,7 @@ EXTERNAL = Path(os.environ.get("P105_SHARED", ROOT.parent / "shared")) / "extern
 PROFILES = ("ap214", "ap242", "p105")
 
 #: Conversions whose source or output takes more than a few seconds to read or validate.
-SLOW = {"b3d_four_bar_heavy10", "D19_chain_1000_pairs"}
+SLOW = {"b3d_four_bar_heavy10"}
 
 #: Files that hold ``low_order_kinematic_pair_value`` (build123d writes it for every pair) or
 #: only ``low_order_kinematic_pair`` pairs: reading and writing those is the 'loworder' branch's

@@ -196,3 +196,19 @@ def test_what_cannot_be_repaired_is_exit_1_and_no_output(tmp_path):
     assert f"p105: error: {src}: #741: the shapes of links 'base' and 'moving' are in one context #716" in err
     assert "not repaired" in err
     assert not out.exists()
+
+
+def test_a_shape_context_in_other_units_is_not_repaired(tmp_path):
+    """The base link's shape in metres, its link representation in millimetres: writing the
+    link in its shape's context would change what its frames mean."""
+    text = _revolute_values("b3d_revolute")
+    line = "#368 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );"
+    assert line in text
+    src = tmp_path / "shape_in_metres.stp"
+    src.write_text(text.replace(line, line.replace(".MILLI.", "$")))
+    out = tmp_path / "out.stp"
+    proc = cli_in_process("export", "--schema", "ap242", str(src), "-o", str(out))
+    err = proc.stderr.decode()
+    assert proc.returncode == 1, err
+    assert f"p105: error: {src}: #740: link 'base': its representation's context #716 and the context #367" in err
+    assert "other units" in err and not out.exists()
