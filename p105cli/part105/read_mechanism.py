@@ -88,14 +88,15 @@ import numpy as np
 from ..kinematics import placements as pl
 from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
+from ..schema.model import Literal
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
 from ..schema.values import number as _num
 from ..step.errors import ModelError
 from . import geometry
 from . import layout as lay
-from .catalogue import FREEDOM_FLAGS, GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, \
-    pair_kind_of_entity, range_on_values
+from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
+    range_on_values
 from .model_file import ContextScale, ModelFile, model_error
 from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
@@ -156,7 +157,7 @@ class _Reader:
         if pl_.relationship is not None:
             ids["relationship"] = pl_.relationship
         if self.layout == "ap242":
-            self._explicit_derived(p, kind, entity)
+            self._explicit_derived(p, entity)
         params = self._params(p, kind, s1)
         for key, f, sc in (("su_1", f1, s1), ("su_2", f2, s2)):
             if d.is_a(f, "su_parameters"):  # kept so that a writer can give the frame back as written
@@ -215,22 +216,22 @@ class _Reader:
         raise model_error(p, f"{shown}: this pair type is not supported by the kinematics model "
                      "(see docs/model.md)")
 
-    def _explicit_derived(self, p, kind, entity) -> None:
+    def _explicit_derived(self, p, entity) -> None:
         """Lenient reading: the freedom flags and the transformation's name of an AP242 pair,
         which AP242 derives (``*``), written explicitly (Open CASCADE's and build123d's writers
         do). The pair moves as its entity says; one deviation names what the file writes, and
-        says plainly where it contradicts the standard."""
+        says plainly where it contradicts the standard (the DERIVE clauses of the schema)."""
         d = self.d
         written = []
         conflicts = []
-        derived = FREEDOM_FLAGS.get(kind)
+        derived = _derived_flags(d.schema, entity)
         if derived is not None:
             raw = [d.get(p, f"low_order_kinematic_pair.{f}", None) for f in _FLAG_NAMES]
             if any(v is not None and not (type(v) is dict and v.get("derived")) for v in raw):
                 written.append("the freedom flags t_x .. r_z")
-                says = tuple(int(_is_true(v)) for v in raw)
-                if says != tuple(derived):
-                    conflicts.append(_motion_conflict(says, tuple(derived), entity))
+                says = tuple(_is_true(v) for v in raw)
+                if says != derived:
+                    conflicts.append(_motion_conflict(says, derived, entity))
         name = d.get(p, "item_defined_transformation.name", None)
         if isinstance(name, str):
             written.append("item_defined_transformation.name")
@@ -439,6 +440,23 @@ class _Reader:
 
 
 _FLAG_NAMES = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
+
+
+def _derived_flags(schema, entity: str) -> Optional[tuple]:
+    """The freedom flags (t_x .. r_z) the schema's DERIVE clauses give ``entity`` (its own or a
+    supertype's), None when it derives none (the generic low_order_kinematic_pair states them)."""
+    found: dict = {}
+    todo, seen = [entity], set()
+    while todo:
+        e = schema.entities.get(todo.pop(0))
+        if e is None or e.name in seen:
+            continue
+        seen.add(e.name)
+        for a in e.derived:
+            if a.supertype == "low_order_kinematic_pair" and isinstance(a.expr, Literal):
+                found.setdefault(a.name, a.expr.value is True)  # the most specific clause wins
+        todo.extend(e.supertypes)
+    return tuple(found[f] for f in _FLAG_NAMES) if all(f in found for f in _FLAG_NAMES) else None
 
 
 def _motion_words(flags: tuple) -> str:
