@@ -152,10 +152,11 @@ def test_validate_keeps_reporting_every_deviation():
     path = B3D / "b3d_revolute.stp"
     result = validate_document(read_step(path.read_text(), str(path)), str(path))
     errors = {(d.rule, d.entity) for d in result.diagnostics if d.severity == "error"}
+    derived = {d.entity for d in result.diagnostics
+               if d.rule.startswith("SCH-DERIVED") and d.severity in ("error", "warning")}
     assert ("SCH-TYPE", 743) in errors  # a pair among the mechanism's items
     assert ("SCH-TYPE", 742) in errors  # links among the topology's items
-    assert ("SCH-DERIVED", 738) in errors  # explicit flags
-    assert ("SCH-DERIVED", 744) in errors  # explicit state context
+    assert {738, 744} <= derived  # explicit flags and name; explicit state context
     assert ("SCH-kinematic_link_representation_association.wr1", 745) in errors  # one shared context
 
 
