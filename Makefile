@@ -11,7 +11,7 @@ SHARED ?= ../shared
 FUZZ_SECONDS ?= 120
 
 .PHONY: all install demo test test-all fuzz fuzz-commands man bench bench-parse bench-validate bench-graph bench-solve \
-        bench-cable clean
+        bench-solve-scale bench-cable clean
 
 all: test
 
@@ -72,7 +72,7 @@ fuzz-commands: $(STAMP)
 man: $(STAMP)
 	$(PY) -m p105cli.manpages man
 
-bench: bench-parse bench-validate bench-graph bench-solve bench-cable
+bench: bench-parse bench-validate bench-graph bench-solve bench-solve-scale bench-cable
 	$(PY) bench/collect_benchmarks.py
 
 bench-parse: $(STAMP)
@@ -94,6 +94,11 @@ bench-cable: $(STAMP)
 bench-solve: $(STAMP)
 	$(PY) -m pip install --quiet roboticstoolbox-python pin
 	$(PY) bench/bench_solve.py --markdown docs/benchmarks-solve.md
+
+# Long serial chains (1,000, 3,000, 10,000 pairs): graph and solve time, the growth law (its own
+# section of docs/benchmarks-solve.md; the 10,000-pair target of issue 11).
+bench-solve-scale: $(STAMP)
+	$(PY) bench/bench_solve_scale.py --markdown docs/benchmarks-solve.md
 
 clean:
 	rm -rf build .pytest_cache .hypothesis

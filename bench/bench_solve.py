@@ -50,6 +50,7 @@ from p105cli.kinematics.spatial import compose, rot_x, rot_z, trans_x, trans_z
 
 SHARED = Path(os.environ.get("P105_SHARED", REPO.parent / "shared"))
 REFERENCE = SHARED / "reference" / "dh_arms_and_loops.json"
+SCALE_MARK = "<!-- bench_solve_scale -->"   # where bench_solve_scale.py's section starts
 I4 = np.eye(4)
 
 
@@ -428,7 +429,10 @@ def main(argv=None) -> int:
         "the table above.\n\n## Loop closure:"), 1)
     print(text)
     if args.markdown:
-        write_text_atomically(args.markdown, text)
+        # the scale section (bench_solve_scale.py, make bench-solve-scale) is its own run: kept
+        old = args.markdown.read_text() if args.markdown.exists() else ""
+        kept = old[old.index(SCALE_MARK):] if SCALE_MARK in old else ""
+        write_text_atomically(args.markdown, text.rstrip("\n") + ("\n\n" + kept if kept else "\n"))
     return 0
 
 

@@ -282,8 +282,9 @@ PAGES: dict[str, dict] = {
                      "it may be left out.",
         },
         "stdin": [
-            "The model, or the driven values (`--values -`) or the target poses (`--path -`); "
-            "only one of them can come from standard input. Driven values are CSV with a header of "
+            "The model, or the driven values (`--values -`), the target poses (`--path -`), the "
+            "scene (`--scene -`, JSON or TOML) or the key points (`--keypoints -`); only one of them "
+            "can come from standard input (two are a usage error naming both). Driven values are CSV with a header of "
             "pair names (`name[0]`, `name[1]`... for multi-valued pairs) and an optional `t` "
             "column, or JSON Lines `{\"t\": t, \"pairs\": {name: value}}`; SI units and radians "
             "unless `--length-unit` and `--angle-unit` say otherwise.",

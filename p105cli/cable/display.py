@@ -13,7 +13,9 @@ Input: the ``cable_state`` records of :func:`p105cli.cable.workflow.run_scene`
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 
 import numpy as np
 
@@ -77,9 +79,30 @@ def _axes_limits(ax, states):
     ax.set_zlabel("z (m)")
 
 
+def _picture_format(path, stdout_format: str) -> str:
+    """The format a picture is written in: its file name's extension; ``-`` (standard output,
+    no name to tell) the text format ``stdout_format``."""
+    if os.fspath(path) == "-":
+        return stdout_format
+    return os.path.splitext(os.fspath(path))[1].lower().lstrip(".")
+
+
+@contextlib.contextmanager
+def _picture_file(path, binary: bool):
+    """``path`` written atomically, or standard output for ``-``."""
+    if os.fspath(path) == "-":
+        sys.stdout.flush()
+        yield sys.stdout.buffer if binary else sys.stdout
+        (sys.stdout.buffer if binary else sys.stdout).flush()
+        return
+    with atomic_file(path, binary=binary) as fh:
+        yield fh
+
+
 def plot_shapes(records, path, *, title: str | None = None) -> None:
-    """Every key point's shape, coloured by time, to ``path`` (.png or .svg), written atomically."""
-    fmt = os.path.splitext(os.fspath(path))[1].lower().lstrip(".")
+    """Every key point's shape, coloured by time, to ``path`` (.png or .svg; ``-``: SVG on
+    standard output), written atomically."""
+    fmt = _picture_format(path, "svg")
     if fmt not in ("png", "svg"):
         raise DisplayError(f"shapes are drawn to .png or .svg, not {fmt!r}")
     states = _states(records)
@@ -100,15 +123,16 @@ def plot_shapes(records, path, *, title: str | None = None) -> None:
         ax.set_title(title or f"{', '.join(cables)}: {len(keys)} key points")
         # deterministic output: no timestamps in the file
         meta = {"Date": None} if fmt == "svg" else {"Software": "p105"}
-        with atomic_file(path, binary=True) as fh:
+        with _picture_file(path, binary=True) as fh:
             fig.savefig(fh, format=fmt, metadata=meta)
     finally:
         plt.close(fig)
 
 
 def animate(records, path, *, fps: int = 5) -> None:
-    """The cable moving through the key points: ``.gif`` (Pillow) or self-contained ``.html``."""
-    fmt = os.path.splitext(os.fspath(path))[1].lower().lstrip(".")
+    """The cable moving through the key points: ``.gif`` (Pillow) or self-contained ``.html``
+    (``-``: HTML on standard output)."""
+    fmt = _picture_format(path, "html")
     if fmt not in ("gif", "html"):
         raise DisplayError(f"animations are written as .gif or .html, not {fmt!r}")
     states = _states(records)
@@ -147,7 +171,7 @@ def animate(records, path, *, fps: int = 5) -> None:
                     os.unlink(tmp)
         else:
             html = anim.to_jshtml(fps=fps, default_mode="loop")
-            with atomic_file(path) as fh:
+            with _picture_file(path, binary=False) as fh:
                 fh.write("<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>cable</title></head>"
                          f"<body>\n{html}\n</body></html>\n")
     finally:

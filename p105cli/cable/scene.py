@@ -140,7 +140,17 @@ def load_scene_file(path) -> dict:
             raw = fh.read()
     except OSError as err:
         raise SceneError("$", f"cannot read: {err.strerror}", path) from None
-    if path.endswith(".toml"):
+    return parse_scene_bytes(raw, path, toml=path.endswith(".toml"))
+
+
+def looks_like_toml(raw: bytes) -> bool:
+    """A scene without a file name (standard input): JSON is an object, so anything else is TOML."""
+    return not raw.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"{")
+
+
+def parse_scene_bytes(raw: bytes, path: str, *, toml: bool) -> dict:
+    """The raw dict of a scene's bytes (JSON, or TOML); errors name ``path``."""
+    if toml:
         import tomllib
         try:
             return tomllib.loads(raw.decode("utf-8"))

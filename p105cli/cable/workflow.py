@@ -48,7 +48,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from p105cli.cable.scene import Scene, SceneError, pose_matrix, read_scene, scene_has_cables
-from p105cli.formats.poses import parse_pose_file
+from p105cli.formats.poses import parse_pose_file, parse_poses
 from p105cli.formats.text import FormatError
 
 __all__ = ["run_scene", "load_keypoints", "KeypointError", "scene_needs_cables",
@@ -64,7 +64,7 @@ class KeypointError(FormatError):
 
 # --- key points ---------------------------------------------------------------------
 
-def load_keypoints(path) -> list[dict]:
+def load_keypoints(path, text: str | None = None) -> list[dict]:
     """Key points ``[{"t": float, "pose": (4, 4) array, "line": int}]`` from a pose file.
 
     The file is read by :mod:`p105cli.formats.poses` (JSON Lines ``{"t", "pose"}``
@@ -72,10 +72,11 @@ def load_keypoints(path) -> list[dict]:
     is the key point's index. Poses are in the scene's length unit and in the
     frame the scene gives for the moving end; they are converted by
     :func:`run_scene`. Times must not decrease. Errors name ``FILE:LINE:COL``.
+    ``text``: the file's text when it is already read (standard input), named ``path``.
     """
     path = os.fspath(path)
     try:
-        samples = parse_pose_file(path)
+        samples = parse_pose_file(path) if text is None else parse_poses(text, path)
     except OSError as err:
         raise KeypointError(f"{path}: cannot read: {err.strerror}") from None
     except FormatError as err:
@@ -411,7 +412,8 @@ class _CableRun:
             records.append(_diag("error", sol.status if sol.status != "ok" else "not_converged",
                                  spec.name, key, t,
                                  f"cable {spec.name!r}: the {spec.model} solver did not converge "
-                                 f"(status {sol.status}, residual {float(sol.residual):.3g})"))
+                                 f"(status {sol.status}, residual {float(sol.residual):.3g})"
+                                 + (f": {sol.message}" if getattr(sol, "message", "") else "")))
             return records, True
         if sol.status == "non_unique":
             records.append(_diag("warning", "non_unique", spec.name, key, t,

@@ -26,13 +26,8 @@ def _convert(doc, schema: str, occt_compat: bool):
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
-    from p105cli.part105.convert import RepairError
-    try:
-        with naming_source(doc):  # the conversion reads the source too: its errors name the file
-            out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
-    except RepairError as err:  # a conversion that would not conform: nothing is written
-        diag("error", f"{doc.source}: {err}")
-        raise click.exceptions.Exit(ExitCode.FINDINGS) from None
+    with naming_source(doc):  # the conversion reads the source too: its errors name the file
+        out, diagnostics = write_mechanism(mechanisms[0], schema, source=model, occt_compat=occt_compat)
     for message in diagnostics:
         diag("warning", f"{doc.source}: {message}")
     return out
@@ -59,7 +54,11 @@ def export(to, schema, occt_compat, input, output, stream):
     With --schema the mechanism is converted between the Part 105:1996
     layout (ap214; p105 allows su_parameters) and the AP242 layout;
     everything else in the file is kept, and whatever the target cannot
-    express is reported on stderr with its #id.
+    express is reported on stderr with its #id. A pair the target has no
+    entity for (an AP242 low_order_kinematic_pair whose freedom flags are
+    no named pair's, going to the 1996 layout) is not dropped: the
+    conversion is refused with exit 1, naming the pair, and nothing is
+    written.
 
     --occt-compat (AP242 only): Open CASCADE's reader misreads the
     standard '*' of derived attributes (it takes the freedom flags of a
@@ -83,8 +82,14 @@ def export(to, schema, occt_compat, input, output, stream):
         raise click.UsageError("--occt-compat applies to --schema ap242 only")
     doc = load_document(input)
     if schema is not None:
+        from p105cli.part105.emit import NotWritableError
         report_warnings(doc)
-        doc = _convert(doc, schema, occt_compat)
+        try:
+            doc = _convert(doc, schema, occt_compat)
+        except NotWritableError as err:  # the target cannot express it or the source cannot be
+            # repaired to conform (convert.RepairError): no output, not a bad input
+            diag("error", f"{doc.source}: {err}")
+            return ExitCode.FINDINGS
     with open_output(output, (input,)) as out:
         if to == "p21":
             emit_p21(doc, out)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, Settings, diag, open_output,
-                       report_deviations)
+                       report_deviations, report_warnings)
 from .inputs import load_document
 from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_option, output_option, input_schema, \
     to_option, tol_option
@@ -44,6 +44,7 @@ def graph(to, enrich, mechanism, schema, tol, input, output):
     if not enrich and to == "p21":
         raise click.UsageError("--to p21 writes a model: use it with --enrich")
     doc = load_document(input)
+    report_warnings(doc)
     model, profile, mechs = _mechanisms(doc, schema, mechanism)
     if enrich:
         return _enrich(model, mechs, profile, to, input, output, tol)

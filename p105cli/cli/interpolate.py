@@ -55,10 +55,16 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     "sequence", "t", "interval", "interpolation", "prescribed", "pairs"},
     then one {"type": "summary"} record. Exit 1 when the model has nothing
     that can be sampled.
+
+    An option that would do nothing with the --what chosen is a usage error
+    (exit 2): --path, --quaternion and --ypr with --what configurations,
+    --sequence with --what paths.
     """
     given = _check(t_values, step, count, to, what)
+    _check_what(what, paths, sequences, quaternion, ypr)
     from p105cli.formats import samples
     from p105cli.motion import sampling
+    from p105cli.part105.model_file import ModelFile
     from p105cli.part105.motion import sample_model
 
     doc = load_document(input)
@@ -67,11 +73,10 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
                          quaternion=quaternion, ypr=ypr)
     try:
         with naming_source(doc):
-            result = sample_model(doc, what=what, paths=paths, sequences=sequences, plan=plan,
-                                  profile=schema)
+            model = ModelFile.of(doc, schema)  # kept: its reading warnings are reported
+            result = sample_model(model, what=what, paths=paths, sequences=sequences, plan=plan)
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
-    report_deviations(doc)
     for inst, msg in result.skipped:
         diag("warning", f"{source_of(doc)}: #{inst}: {msg}")
     try:
@@ -83,6 +88,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
     report_warnings(doc)
+    report_deviations(doc)
     if not result.path_list and not result.sequence_list:
         diag("error", f"{source_of(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
         raise click.exceptions.Exit(ExitCode.FINDINGS)
@@ -100,3 +106,17 @@ def _check(t_values, step, count, to, what) -> int:
     if step is not None and not step > 0.0:
         raise click.BadParameter("must be positive", param_hint="--step")
     return given
+
+
+def _check_what(what, paths, sequences, quaternion, ypr) -> None:
+    """Options that would do nothing with the --what chosen are usage errors."""
+    if what == "configurations":
+        for flag, given, does in (("--path", paths, "names a kinematic path"),
+                                  ("--quaternion", quaternion, "adds to the kinematic paths' frames"),
+                                  ("--ypr", ypr, "adds to the kinematic paths' frames")):
+            if given:
+                raise click.UsageError(f"{flag} {does}: --what configurations samples only the configuration "
+                                       "sequences")
+    if what == "paths" and sequences:
+        raise click.UsageError("--sequence names a configuration sequence: --what paths samples only the "
+                               "kinematic paths")

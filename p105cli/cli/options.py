@@ -27,6 +27,12 @@ model_argument = click.argument("model", metavar="[MODEL|-]", required=False, de
 #: validate's files: any number, none meaning stdin.
 inputs_argument = click.argument("inputs", metavar="[FILES|-]...", nargs=-1)
 
+
+def file_option(flag: str, dest: str, help: str):
+    """An option naming a file, ``-`` being standard input (or output, for a picture): every
+    FILE option of p105 accepts ``-`` (at most one input per run reads stdin; the command checks)."""
+    return click.option(flag, dest, metavar="FILE|-", default=None, help=help)
+
 # ---------------------------------------------------------------- output
 
 

@@ -16,29 +16,29 @@ import click
 from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
                        report_deviations, report_warnings, stderr_is_terminal)
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
-from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, input_schema, \
+from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, file_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
-from .solve_rules import check_usage
-from .solve_scene import load_scene, model_scene, run_scene, scene_only
+from .solve_rules import check_after_reading, check_usage
+from .solve_scene import check_samples, load_scene, model_scene, prepare_scene, run_scene, scene_only
 
 FORMATS = ["model", "jsonl", "csv"]
 
 
 @click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @model_argument
-@click.option("--values", "values", metavar="FILE|-", default=None,
-              help="Driven pair values, one configuration per row: CSV with a header of pair names "
-                   "(name[0], name[1]... for multi-valued pairs) and an optional t column, or JSON Lines "
-                   '{"t": t, "pairs": {name: value}}.')
+@file_option("--values", "values",
+             help="Driven pair values, one configuration per row: CSV with a header of pair names "
+                  "(name[0], name[1]... for multi-valued pairs) and an optional t column, or JSON Lines "
+                  '{"t": t, "pairs": {name: value}}.')
 @click.option("--set", "sets", metavar="PAIR=VALUE", multiple=True,
               help="Drive PAIR at VALUE in every configuration (PAIR=V1,V2 or PAIR[j]=V for multi-valued "
                    "pairs). Without --values: one configuration.")
 @click.option("--sweep", "sweeps", metavar="PAIR=START:STOP:COUNT", multiple=True,
               help="Drive PAIR from START to STOP in COUNT evenly spaced configurations (instead of "
                    "--values; several --sweep options run together).")
-@click.option("--path", "path", metavar="FILE|-", default=None,
-              help="Inverse analysis: target poses of --target-link, JSON Lines {\"t\": t, \"pose\": 4x4} "
-                   "or CSV t,m00,...,m23.")
+@file_option("--path", "path",
+             help="Inverse analysis: target poses of --target-link, JSON Lines {\"t\": t, \"pose\": 4x4} "
+                  "or CSV t,m00,...,m23.")
 @click.option("--target-link", metavar="LINK", default=None, help="The link whose frame follows --path.")
 @click.option("--target-frame", metavar="NAME", default=None,
               help="A named frame of --target-link to put on the path (default: the link frame).")
@@ -66,15 +66,17 @@ FORMATS = ["model", "jsonl", "csv"]
 @length_unit_option
 @mechanism_option
 @input_schema(SCHEMA_HELP_SHORT)
-@click.option("--scene", metavar="FILE", default=None,
-              help="A scene (JSON or TOML) of effects to simulate on the solved motion (cables).")
-@click.option("--keypoints", metavar="FILE", default=None,
-              help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
-@click.option("--plot", "plot", metavar="FILE", default=None,
-              help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; "
-                   "needs matplotlib: pip install 'p105cli[plot]').")
-@click.option("--animate", "animation", metavar="FILE", default=None,
-              help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html).")
+@file_option("--scene", "scene",
+             help="A scene (JSON or TOML; from standard input TOML unless it is a JSON object) of effects "
+                  "to simulate on the solved motion (cables).")
+@file_option("--keypoints", "keypoints",
+             help="Moving-end key points for the scene's cables (JSON Lines or CSV).")
+@file_option("--plot", "plot",
+             help="With a scene: draw the cable shapes over the key points to FILE (.png or .svg; - : SVG "
+                  "on standard output, the records going to -o; needs matplotlib: pip install 'p105cli[plot]').")
+@file_option("--animate", "animation",
+             help="With a scene: animate the cables along the path to FILE (.gif or a self-contained .html; "
+                  "- : HTML on standard output, the records going to -o).")
 @click.option("--timings/--no-timings", default=True, show_default=True,
               help="Report the time per configuration in the jsonl summary (what the run cost); "
                    "--no-timings gives byte-reproducible output.")
@@ -88,9 +90,24 @@ def solve(**options):
     the initial state, which fixes the assembly branch. A branch change, a
     dead centre or a configuration that cannot be assembled is reported on
     that configuration (status), never silently. Inverse: --path with
-    --target-link. Exit 1 when any configuration is not ok.
+    --target-link. Exit 1 when any configuration is not ok, or a scene's
+    cable is over-length or cannot be solved; the reason is on standard
+    error.
+
+    Every FILE option reads standard input when given as -, one of them
+    per run. An option that would do nothing in the mode chosen is a usage
+    error (exit 2), checked before anything is solved, as is a scene and its
+    key points: --plot, --animate and --keypoints without a scene that runs;
+    --target-link and --target-frame without --path; --resulting-path
+    without --to model; --timings with --to csv or model; --angle-unit or
+    --length-unit with --to model and nothing to convert; options of the
+    analysis of a model (--program, --mechanism, --schema, --tol,
+    --max-iter, --resulting-path, the units) with a scene alone.
     """
     o = SimpleNamespace(**options)
+    ctx = click.get_current_context()
+    o.given = {name for name in options
+               if ctx.get_parameter_source(name) not in (None, click.core.ParameterSource.DEFAULT)}
     o.to_given = o.to is not None
     o.to = o.to or ("jsonl" if o.scene is not None else "model")
     o.want = check_usage(o)
@@ -102,10 +119,16 @@ def solve(**options):
         return scene_only(o)
     model, mech = _read_model(o.model, o.schema, o.mechanism)
     doc = model.doc
-    if o.scene_dict is None and getattr(doc, "scene", None) is not None:
+    o.scene_in_model = o.scene_dict is None and getattr(doc, "scene", None) is not None
+    if o.scene_in_model:
         o.to, o.scene_dict, o.scene = model_scene(doc, o.model, o.to, o.to_given)
+    # the scene is checked before the mechanism is solved: no output precedes its errors
+    o.prepared = prepare_scene(o, mech) if o.scene_dict is not None else None
+    check_after_reading(o)
     prog = _program(model, mech, o.count, o.step) if o.program else None
     pl, motion, blocks = _start(o, doc, mech, prog)
+    if o.prepared is not None:
+        check_samples(o.prepared, mech, _samples(motion))
     requests = _resulting_paths(mech, pl, o.resulting_paths, motion) if o.to == "model" else []
     if _output(o, model, mech, pl, motion, blocks, requests):
         raise click.exceptions.Exit(ExitCode.FINDINGS)
@@ -115,7 +138,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
     """Every block written (and the scene run on the motion); the warnings. True on findings."""
     from p105cli.formats.solve_records import Table, Tally, write_blocks
     tally = Tally(motion.inverse)
-    placements = [] if o.scene_dict is not None else None
+    placements = [] if o.prepared is not None else None
     with open_output(o.output, (o.model, o.values, o.path, o.scene, o.keypoints)) as out:
         if o.to == "model":
             def write(result, links, t, offset):
@@ -127,8 +150,7 @@ def _output(o, model, mech, pl, motion, blocks, requests) -> bool:
         write_blocks(blocks, motion.t, write, tally, mech.link_names, placements)
         if o.to == "jsonl":
             tally.write_summary(out, mech, o.lf, o.af, o.timings)
-            if o.scene_dict is not None and not run_scene(o.scene_dict, o.scene, o.keypoints, placements, out,
-                                                           o.pictures, o.timings):
+            if o.prepared is not None and not run_scene(o.prepared, placements, out, o.pictures, o.timings):
                 tally.failed = True
     for level, message in tally.messages(stderr_is_terminal()):
         diag(level, message)
@@ -184,6 +206,17 @@ def _start(o, doc, mech, prog):
     except solver.SolveError as err:
         raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {err}") from None
     return pl, motion, itertools.chain([first], blocks)
+
+
+def _samples(motion) -> int | None:
+    """How many configurations the motion has (None: not known before it is solved)."""
+    if motion.t is not None:
+        return len(motion.t)
+    if motion.poses is not None:
+        return len(motion.poses)
+    if motion.driven:
+        return len(next(iter(motion.driven.values())))
+    return None
 
 
 def _check_pair_parameters(o, mech, pl):

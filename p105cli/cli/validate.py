@@ -61,10 +61,16 @@ def _check_one(path: str, schema: str | None, timings: bool):
 def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pass_through, list_rules, timings):
     """Check Part 21 files (or p105/1 models) against the schema and Part 105's rules.
 
-    Reports P21-* syntax and structure, SCH-* conformance (types, arity,
-    references, and the WHERE, UNIQUE and global rules evaluated from the
-    EXPRESS long form on every kinematic instance and what it uses), and
-    KIN-* checks the schema cannot express (units, ranges, placements).
+    Reports P21-* syntax, structure and encoding (P21-ENCODING: raw 8-bit
+    bytes that are not UTF-8, a warning per line), SCH-* conformance (types,
+    arity, references, entity types unknown to the declared schema, and the
+    WHERE, UNIQUE and global rules evaluated from the EXPRESS long form on
+    every kinematic instance and what it uses), and KIN-* checks the schema
+    cannot express (units, ranges, placements). A value written where the
+    schema derives the attribute is compared with the derivation:
+    SCH-DERIVED-EXPLICIT (warning) when equal, SCH-DERIVED-CONFLICT (error,
+    naming both values) when not. The edition of AP214 comes from
+    FILE_SCHEMA's object identifier (edition 1 writes a unit's dimensions).
     With several files all are checked and the exit status is the worst.
     """
     from p105cli.rules.diagnostics import exit_code
@@ -78,6 +84,8 @@ def validate(inputs, fmt, fail_on, exit_zero, select, ignore, schema, output, pa
     code = exit_code(results, fail_on, exit_zero)
     if output is not None:
         _say_unreadable(results)
+        if code == ExitCode.FINDINGS:
+            _say_findings(results, output)
     _report(fmt, results, output, inputs, pass_through)
     if pass_through and code == ExitCode.OK and raws[0] is not None:
         copy_to_stdout(raws[0])  # the input's own bytes, unchanged
@@ -116,6 +124,15 @@ def _say_unreadable(results):
             for d in result.diagnostics:
                 where = f"{d.file}:{d.line}:{d.column}" if d.line else d.file
                 diag("error", f"{where}: {d.message}")
+
+
+def _say_findings(results, output):
+    """The report is in a file: an exit 1 still says why on stderr, one line per file."""
+    for result in results:
+        s = result.summary
+        if result.readable and (s.errors or s.warnings or s.notes):
+            diag("error", f"{result.file}: {s.errors} errors, {s.warnings} warnings, {s.notes} notes "
+                          f"(the report is in {output})")
 
 
 def _report(fmt, results, output, inputs, pass_through):

@@ -58,7 +58,7 @@ def structure_document(mech, st: Structure) -> dict:
     joints = []
     for p in mech.pairs:
         joints.append({"name": p.name, "id": p.ids.get("pair"), "joint_id": p.ids.get("joint"),
-                       "kind": p.kind, "link1": p.link1, "link2": p.link2, "freedoms": p.value_count,
+                       "kind": p.kind, "link1": p.link1, "link2": p.link2, "freedoms": p.freedoms,
                        "actuated": bool(p.actuated), "tree": p.name in tree_pairs,
                        "loops": loops_of.get(p.name, []), "redundant": p.name in redundant})
     loops = [{"chord": st.chords[li], "links": _loop_links(mech, lp),
@@ -154,7 +154,7 @@ def to_graphml(mech, st: Structure) -> str:
                    + data("n_component", comp_of[ln]) + "</node>")
     for k, p in enumerate(mech.pairs):
         out.append(f'    <edge id="e{k}" source="{node_id[p.link1]}" target="{node_id[p.link2]}">'
-                   + data("e_name", p.name) + data("e_kind", p.kind) + data("e_freedoms", p.value_count)
+                   + data("e_name", p.name) + data("e_kind", p.kind) + data("e_freedoms", p.freedoms)
                    + data("e_tree", p.name in tree) + data("e_loops", " ".join(loops_of.get(p.name, [])))
                    + data("e_redundant", p.name in red) + "</edge>")
     out.append("  </graph>")

@@ -304,7 +304,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         cpairs = [k for k, p in enumerate(pairs) if p.link1 in comp_set]
         cloops = [li for li, c in enumerate(loop_comp) if c == ci]
         floating = comp[0] != mech.base
-        dof = sum(slices[k].stop - slices[k].start for k in cpairs)
+        dof = sum(pairs[k].freedoms for k in cpairs)  # a locked value is no freedom
         n_links, n_joints = len(comp), len(cpairs)
         gruebler = 6 * (n_links - (0 if floating else 1) - n_joints) + dof
         c = Component(links=list(comp), root=comp[0], pairs=[names[k] for k in cpairs],
@@ -335,7 +335,7 @@ def analyse(mech, *, tol: float | None = None) -> Structure:
         tree=[(names[k], u, v, fwd) for k, u, v, fwd in tree_idx],
         chords=[names[k] for k in chords],
         loops=[[(names[k], fwd) for k, fwd in lp] for lp in loops],
-        kind="network" if loops else "tree", components=components, dof=n,
+        kind="network" if loops else "tree", components=components, dof=sum(p.freedoms for p in pairs),
         mobility_gruebler=int(sum(c.mobility_gruebler for c in components)),
         mobility=mobility, redundant_constraints=redundant, redundant_joints=redundant_joints,
         rank=rank, tol=rtol_used, closure_residual=worst_closure, size=size, notes=notes, _plan=pl)

@@ -148,6 +148,11 @@ class Pair:
         return self.type.value_count
 
     @property
+    def freedoms(self) -> int:
+        """The pair's freedoms: its values less those its flags lock (:meth:`PairType.freedoms`)."""
+        return self.type.freedoms(self.params)
+
+    @property
     def value_names(self) -> tuple:
         return self.type.value_names
 
@@ -220,8 +225,9 @@ class Mechanism:
                     raise ValueError(f"mechanism {self.name!r}: pair {p.name!r} names unknown link {ln!r}")
         if self.base not in known:
             raise ValueError(f"mechanism {self.name!r}: base link {self.base!r} is not one of its links")
+        pset = set(pnames)
         for k, v in self.initial.items():
-            if k not in pnames:
+            if k not in pset:
                 raise ValueError(f"mechanism {self.name!r}: initial state names unknown pair {k!r}")
 
     # -- lookups

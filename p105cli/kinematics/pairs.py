@@ -72,7 +72,8 @@ sliding_surface        (u1, v1, u2, v2, rotation); params         ``F1(u1,v1) Rz
 rolling_surface        (u1, v1, rotation); + state (u2, v2)       as sliding_surface, no slip
 sliding_curve          (u1, u2); curve_1, curve_2, orientation    ``G1(u1) Rz(pi)^[not o] G2(u2)^-1``
 rolling_curve          (u1,); u2 from equal arc lengths           as sliding_curve
-low_order (AP242)      (tx, ty, tz, rx, ry, rz); flags t_x..r_z   ``T(t) Rx(rx) Ry(ry) Rz(rz)``
+low_order (AP242)      (tx, ty, tz, rx, ry, rz); flags t_x..r_z   a named pair's flags: its M;
+                                                                  else ``T(t) Rx(rx) Ry(ry) Rz(rz)``
 spherical_with_pin     (yaw, pitch, roll = 0)                     ``Ry(pitch) Rz(yaw)``
 =====================  =========================================  ==============================
 
@@ -159,10 +160,10 @@ Where these come from, and what had to be chosen:
   non-holonomic: ``point_on_surface_2`` is state and their Jacobian is the
   no-slip velocity map (:func:`rolling_surface_rates`). Degenerate contact
   frames raise ValueError (never NaN).
-* low_order (AP242 ``low_order_kinematic_pair``): translation first, then
-  ``Rx(rx) Ry(ry) Rz(rz)`` (= the ypr matrix with roll, pitch, yaw = rx, ry,
-  rz, so a spherical pair is the low order pair with the three r flags); a
-  value whose flag is FALSE must be 0 and has a zero Jacobian column.
+* low_order (AP242 ``low_order_kinematic_pair``): a named pair's flags move
+  as that pair (:data:`LOW_ORDER_NAMED`); others translation first, then
+  ``Rx(rx) Ry(ry) Rz(rz)`` (the ypr matrix, roll, pitch, yaw = rx, ry, rz).
+  A locked value must be 0 (zero Jacobian column); docs/pairs.md.
 * spherical_pair_with_pin: its ``spherical_pair_value`` ypr with the roll
   (about x) locked, as AP242's DERIVE (r_x FALSE, r_y and r_z TRUE) says.
   (``spherical_pair_with_pin_and_range`` bounds yaw and roll, not pitch; we
@@ -186,7 +187,7 @@ from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
     "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
-    "VALUE_UNITS",
+    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "named_low_order", "low_order_components",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -692,9 +693,45 @@ def _rc_j(q, p, shape):
     return _col([c1 + c2 * du2[..., None]], shape)
 
 
-# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz); M = T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz), locked values 0
+# low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free
 
 _FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
+FREEDOM_NAMES = _FLAGS
+
+#: The one table of what a flag set and a low-order value mean: kind -> (the flags t_x..r_z
+#: AP242 derives for it, the component (0..5 = tx, ty, tz, rx, ry, rz) of a
+#: low_order_kinematic_pair_value giving each of its values). Spherical (yaw, pitch, roll) =
+#: (rz, ry, rx); universal: rz then rx; prismatic: AP242's t_x. Where two kinds share flags,
+#: the first is the one a generic pair is (universal, not homokinetic). docs/pairs.md.
+LOW_ORDER_NAMED = {
+    "revolute": ((0, 0, 0, 0, 0, 1), (5,)),
+    "prismatic": ((1, 0, 0, 0, 0, 0), (0,)),
+    "cylindrical": ((0, 0, 1, 0, 0, 1), (2, 5)),
+    "spherical": ((0, 0, 0, 1, 1, 1), (5, 4, 3)),
+    "spherical_with_pin": ((0, 0, 0, 0, 1, 1), (5, 4, 3)),
+    "universal": ((0, 0, 0, 1, 0, 1), (5, 3)),
+    "homokinetic": ((0, 0, 0, 1, 0, 1), (5, 3)),
+    "planar": ((1, 1, 0, 0, 0, 1), (5, 0, 1)),
+    "unconstrained": ((1, 1, 1, 1, 1, 1), (0, 1, 2, 5, 4, 3)),
+    "fully_constrained": ((0, 0, 0, 0, 0, 0), ()),
+}
+
+
+def named_low_order(flags) -> "str | None":
+    """The named pair kind whose freedoms are the flags ``(t_x, ..., r_z)``, or None."""
+    key = tuple(int(bool(f)) for f in flags)
+    for kind, (named, _components) in LOW_ORDER_NAMED.items():
+        if named == key:
+            return kind
+    return None
+
+
+def low_order_components(kind: str, layout: str = "ap242") -> tuple:
+    """The component (0..5 = tx, ty, tz, rx, ry, rz of a low-order value) giving each value
+    of a ``kind`` pair; a prismatic pair's slide axis is its layout's (1996: z)."""
+    if kind == "prismatic":
+        return (_slide_axis(layout),)
+    return LOW_ORDER_NAMED[kind][1]
 
 
 #: A locked value of a low order pair within this of 0 is 0: the solver's steps leave roundoff
@@ -709,14 +746,35 @@ def _low_check(q, p):
                              f"({LOW_ORDER.value_names[i]}), which must be 0")
 
 
+def _low_named(p):
+    """(the named PairType, its components) when the flags are a named pair's, else None."""
+    kind = named_low_order([p[f] for f in _FLAGS])
+    if kind is None:
+        return None
+    t = PAIR_KINDS[kind]
+    return (t.with_defaults(layout="ap242") if kind == "prismatic" else t), low_order_components(kind)
+
+
+def _named_q(q, comps, shape):
+    return np.stack([q[c] for c in comps], axis=-1) if comps else np.zeros(shape + (0,))
+
+
 def _low_m(q, p):
     _low_check(q, p)
+    named = _low_named(p)
+    if named is not None:
+        return named[0].motion(_named_q(q, named[1], p["_shape"]))
     t = np.stack(np.broadcast_arrays(q[0], q[1], q[2]), axis=-1)
     return transform(ypr_rotation(q[5], q[4], q[3]), t)
 
 
 def _low_j(q, p, shape):
     _low_check(q, p)
+    named = _low_named(p)
+    if named is not None:  # the named pair's columns at its components, zero elsewhere
+        J = np.zeros(shape + (6, 6))
+        J[..., list(named[1])] = named[0].motion_jacobian(_named_q(q, named[1], shape))
+        return J
     R = ypr_rotation(q[5], q[4], q[3])
     cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
     wz, wy, wx = _ypr_body_axes(*np.broadcast_arrays(q[5], q[4]))
@@ -794,6 +852,20 @@ class PairType:
     def angle_mask(self) -> tuple:
         """Which values are plane angles (``value_units == "A"``)."""
         return tuple(u == "A" for u in self.value_units)
+
+    def locked(self, params=None) -> tuple:
+        """Which values are held at 0 (a zero Jacobian column, never moved by the solver): a
+        generic low-order pair's whose flag is FALSE, a spherical pair with pin's roll."""
+        if self.kind == "low_order":
+            p = {**self.defaults, **dict(params or {})}
+            return tuple(not p[f] for f in _FLAGS)
+        if self.kind == "spherical_with_pin":
+            return (False, False, True)
+        return (False,) * self.value_count
+
+    def freedoms(self, params=None) -> int:
+        """The pair's freedoms: its values less the locked ones (the graph's count)."""
+        return self.value_count - sum(self.locked(params))
 
     def with_defaults(self, **defaults) -> "PairType":
         """The same pair type with other parameter defaults (e.g. ``layout="ap242"``)."""

@@ -47,14 +47,14 @@ from __future__ import annotations
 import numpy as np
 
 # the argument checks are spatial's (one message format for both modules)
-from .spatial import _f, _first_bad, _hom, _mat, _norm, _r3, _rot_part, _vec3
+from .spatial import _f, _first_bad, _hom, _mat, _norm, _r3, _rot_part, _vec3, cross
 
 __all__ = [
     "DEGREE",
     "ANGLE_LOCK_TOL",
     "build_axes", "axis2_placement_3d",
     "su_parameters", "su_to_axis2_placement_3d", "su_parameters_from_transform",
-    "ypr_rotation", "ypr_from_matrix", "rotation_about_direction",
+    "ypr_rotation", "ypr_from_matrix", "canonical_ypr", "rotation_about_direction",
     "convert_spatial_to_ypr_rotation",
     "plane_angle_to_radian", "radian_to_plane_angle",
     "EULER_SEQUENCES", "matrix_to_euler", "euler_to_matrix",
@@ -132,7 +132,7 @@ def build_axes(axis=None, ref_direction=None, *, tol: float = 1e-12) -> np.ndarr
     else:
         v = _unit(_vec3(ref_direction, "ref_direction"), "ref_direction", func)
         z, v = np.broadcast_arrays(z, v)
-        sin_angle = _norm(np.cross(v, z))
+        sin_angle = _norm(cross(v, z))
         bad = ~(sin_angle > tol)
         if np.any(bad):
             raise ValueError(
@@ -142,9 +142,9 @@ def build_axes(axis=None, ref_direction=None, *, tol: float = 1e-12) -> np.ndarr
                 "ref_direction must have a component normal to axis (ISO 10303-42, "
                 "axis2_placement_3d WR4)")
     z, v = np.broadcast_arrays(z, v)
-    x = np.cross(z, np.cross(v, z))
+    x = cross(z, cross(v, z))   # spatial's: a placement per pair frame, np.cross's overhead adds up
     x = x / _norm(x)[..., None]
-    y = np.cross(z, x)
+    y = cross(z, x)
     y = y / _norm(y)[..., None]
     return np.stack([x, y, z], axis=-1)
 
@@ -322,6 +322,27 @@ def ypr_rotation(yaw, pitch, roll, unit_factor=1.0) -> np.ndarray:
     R[..., 2, 1] = cy * sr + sy * sp * cr
     R[..., 2, 2] = cp * cr
     return R
+
+
+def canonical_ypr(yaw: float, pitch: float, roll: float, lock_rel_tol: float) -> tuple:
+    """The ``(yaw, pitch, roll)`` that 5.3.7 allows for ``ypr_rotation(yaw, pitch, roll)``: pitch
+    in [-pi/2, pi/2], yaw and roll in (-pi, pi], and at a rectangular pitch angle roll 0, the
+    yaw carrying the rotation about the locked axis (yaw + roll at +pi/2, yaw - roll at -pi/2).
+
+    A triple that already is canonical is returned unchanged. A pitch within
+    ``lock_rel_tol * pi/2`` of +-pi/2 is the lock (the validator's test): it becomes exactly
+    +-pi/2 with roll 0, which moves the rotation by at most about that angle's distance from
+    +-pi/2 (no triple with roll 0 is nearer); any other triple gives the same matrix to
+    rounding (:func:`ypr_from_matrix`)."""
+    half = 0.5 * np.pi
+    y, p, r = (float(x) for x in (yaw, pitch, roll))
+    near_lock = abs(abs(p) - half) <= lock_rel_tol * half
+    if (-np.pi < y <= np.pi and -np.pi < r <= np.pi and abs(p) <= half
+            and not (near_lock and r != 0.0)):
+        return y, p, r
+    # the lock test of ypr_from_matrix is on cos(pitch): the same band around +-pi/2
+    y, p, r = ypr_from_matrix(ypr_rotation(y, p, r), lock_tol=float(np.sin(lock_rel_tol * half)))
+    return float(y), float(p), float(r)
 
 
 def ypr_from_matrix(R, *, lock_tol: float = ANGLE_LOCK_TOL):

@@ -12,7 +12,7 @@ from typing import NamedTuple, Optional
 
 __all__ = ["SCHEMA_AP214", "SCHEMA_AP242", "PROFILES", "APPLICATION", "layout_of", "choose_profile",
            "KINEMATIC_ENTITIES", "HIGHER_PAIR_ENTITIES", "HIGHER_KINDS", "pair_kind_of_entity",
-           "pair_entity", "range_entity", "HIGHER_PAIR_GEOMETRY", "HIGHER_PAIR_ORIENTATION",
+           "pair_entity", "range_entity", "GENERIC_LOW_ORDER", "HIGHER_PAIR_GEOMETRY", "HIGHER_PAIR_ORIENTATION",
            "GEOMETRY_ATTRIBUTES", "HIGHER_PAIR_VALUES", "RangeOn", "RANGE_ON", "range_on_values", "Limit", "LIMITS",
            "LIMIT_SUFFIX", "YPR_NAMES", "limit_attributes"]
 
@@ -138,6 +138,11 @@ def pair_kind_of_entity(entity: str) -> Optional[str]:
     return HIGHER_PAIR_ENTITIES.get(entity)
 
 
+#: AP242's generic low-order pair entities: their flags t_x..r_z say which freedoms are free
+#: (:func:`p105cli.kinematics.pairs.named_low_order` names the pair a flag set is).
+GENERIC_LOW_ORDER = frozenset({"low_order_kinematic_pair", "low_order_kinematic_pair_with_range"})
+
+
 def pair_entity(kind: str, layout: str, with_range: bool = False) -> str:
     """The entity a pair of ``kind`` is written as: ``<kind>_pair`` (1996 and AP242 without a
     range), AP242's ``<kind>_pair_with_range`` subtype when it has one (``with_range``), the
@@ -231,6 +236,12 @@ class Limit(NamedTuple):
 
 YPR_NAMES = ("yaw", "pitch", "roll")
 
+#: How close (relative to pi/2) a ypr pitch is to +-pi/2 to be at the rectangular pitch angle
+#: of 5.3.7, where the roll must be 0, and how far (relative to pi or pi/2) a ypr angle may lie
+#: outside its interval: the one tolerance of the validator (KIN-YPR) and of the writer
+#: (pair_values.ypr_values), so that every triple p105 writes is one it accepts.
+YPR_REL_TOL = 1e-6
+
 #: Every limit suffix of both layouts (the only ones the schemas have).
 LIMITS = {
     "actual_rotation": Limit("actual_rotation", "A", None),
@@ -275,7 +286,7 @@ def limit_attributes(value_name: str) -> Optional[tuple]:
 #: Low pair kinds p105 writes, in the order of ``SUPPORTED_KINDS``; the unit of each of their
 #: values comes from ``PairType.value_units`` (the one angle/length rule).
 WRITTEN_LOW_KINDS = ("revolute", "prismatic", "screw", "cylindrical", "spherical", "universal", "homokinetic",
-                     "planar", "unconstrained", "fully_constrained", "gear", "rack_and_pinion")
+                     "planar", "unconstrained", "fully_constrained", "gear", "rack_and_pinion", "low_order")
 
 #: Higher pairs, as the writers use them: their geometry (params key, which pair frame it is
 #: given in), in the order of the pair's attributes, and whether an ``orientation`` flag
@@ -297,14 +308,24 @@ WRITTEN_HIGHER_RANGES = ("point_on_planar_curve", "point_on_surface")
 HIGHER_PARAMS_NOT_IN_FILE = {"reference_parameter_1": 0.0, "reference_parameter_2": 0.0,
                              "point_on_surface_2": None}
 
-#: AP242: the derived freedom flags (t_x, t_y, t_z, r_x, r_y, r_z) of the low-order pairs,
-#: which are also the freedoms an actuated pair drives. Screw, gear and rack-and-pinion
-#: pairs are low_order_kinematic_pair_with_motion_coupling subtypes (no flags).
-FREEDOM_FLAGS = {
-    "revolute": (0, 0, 0, 0, 0, 1), "prismatic": (1, 0, 0, 0, 0, 0), "cylindrical": (0, 0, 1, 0, 0, 1),
-    "spherical": (0, 0, 0, 1, 1, 1), "universal": (0, 0, 0, 1, 0, 1), "homokinetic": (0, 0, 0, 1, 0, 1),
-    "planar": (1, 1, 0, 0, 0, 1), "unconstrained": (1, 1, 1, 1, 1, 1), "fully_constrained": (0,) * 6,
-}
+#: ``FREEDOM_FLAGS`` (read on first use, :func:`__getattr__`): AP242's derived freedom flags (t_x,
+#: t_y, t_z, r_x, r_y, r_z) of the named low-order pairs p105 writes, which are also the freedoms
+#: an actuated pair drives, from ``kinematics.pairs.LOW_ORDER_NAMED`` (the one table). Screw,
+#: gear and rack-and-pinion pairs are low_order_kinematic_pair_with_motion_coupling subtypes
+#: (no flags: COUPLED_FREEDOMS).
+
+
+def __getattr__(name):
+    # the one flags table lives with the pair motions (numpy): imported when first asked for
+    if name == "FREEDOM_FLAGS":
+        from ..kinematics.pairs import LOW_ORDER_NAMED
+
+        value = {k: flags for k, (flags, _c) in LOW_ORDER_NAMED.items() if k in WRITTEN_LOW_KINDS}
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: The freedom an actuated coupled pair drives (it has no flags of its own).
 COUPLED_FREEDOMS = {"screw": (0, 0, 0, 0, 0, 1), "gear": (0, 0, 0, 0, 0, 1),
                     "rack_and_pinion": (1, 0, 0, 0, 0, 0)}
@@ -312,7 +333,7 @@ COUPLED_FREEDOMS = {"screw": (0, 0, 0, 0, 0, 1), "gear": (0, 0, 0, 0, 0, 1),
 #: Pair kinds with a range entity in each layout (1996 ``*_pair_range``, AP242 ``*_with_range``).
 RANGE_KINDS_1996 = frozenset({"revolute", "prismatic", "screw", "cylindrical", "spherical", "universal",
                               "homokinetic", "planar", "gear", "rack_and_pinion"})
-RANGE_KINDS_AP242 = frozenset({"revolute", "prismatic", "screw", "cylindrical", "spherical", "universal",
+RANGE_KINDS_AP242 = frozenset({"low_order", "revolute", "prismatic", "screw", "cylindrical", "spherical", "universal",
                                "planar", "gear", "rack_and_pinion", "point_on_planar_curve", "point_on_surface"})
 
 #: The mechanism's own instances, both layouts (a converted file holds one mechanism).

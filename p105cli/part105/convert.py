@@ -21,15 +21,15 @@ from p105cli.step.values import record_refs as _rec_refs, ref_id
 from .builder import DERIVED, typed
 from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HIGHER_VALUES,
                         LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, KINEMATIC_ENTITIES)
-from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
+from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, NotWritableError, write_kinematics
 from .layout import link_reps, occurrence_placement, rep_links
 from .model_file import ModelFile
-from .pair_values import value_attributes
+from .pair_values import low_order_value_arguments, value_attributes
 
 __all__ = ["Conversion", "RepairError"]
 
 
-class RepairError(Exception):
+class RepairError(NotWritableError):
     """The source cannot be converted to a file that conforms to the target: the message says
     what cannot be repaired (``export --schema`` exits 1 with it, writing nothing)."""
 
@@ -580,6 +580,9 @@ class Conversion:
         if name is None:
             return None
         kind = self.mech.pair(name).kind
+        if rec["type"] == "low_order_kinematic_pair_value":  # read by its own type: as the pair's value
+            got = low_order_value_arguments(kind, rest, self.mech.pair(name).params.get("layout", "ap242"))
+            return None if got is None else (name, *got)
         if kind in HIGHER_VALUES:
             rest = self._higher_value(kind, rest)
             if rest is None:

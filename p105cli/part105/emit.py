@@ -18,18 +18,28 @@ from collections import defaultdict
 import numpy as np
 
 from p105cli.kinematics.dh import Z_TO_X
-from p105cli.kinematics.pairs import PAIR_KINDS
+from p105cli.kinematics.pairs import FREEDOM_NAMES, PAIR_KINDS
 from p105cli.kinematics.spatial import compose, inverse
 
 from .builder import DERIVED, FALSE, TRUE, Builder, enum, real, typed
 from .catalogue import (COUPLED_FREEDOMS, FREEDOM_FLAGS, HIGHER_GEOMETRY, HIGHER_PARAMS_NOT_IN_FILE, HIGHER_VALUES,
-                        PROFILES, RANGE_KINDS_1996, RANGE_KINDS_AP242, WRITTEN_HIGHER_RANGES, WRITTEN_LOW_KINDS)
-from .pair_values import scalar_values, value_arguments, value_entity
+                        PROFILES, RANGE_KINDS_1996, RANGE_KINDS_AP242, WRITTEN_HIGHER_RANGES, WRITTEN_LOW_KINDS,
+                        pair_entity)
+from .pair_values import scalar_values, value_arguments, value_entity, ypr_values
 
-__all__ = ["Emitter", "IdBuilder", "write_kinematics", "SUPPORTED_KINDS", "VALUE_UNITS", "HIGHER_KINDS_WRITTEN"]
+__all__ = ["Emitter", "IdBuilder", "NotWritableError", "write_kinematics", "SUPPORTED_KINDS", "VALUE_UNITS", "HIGHER_KINDS_WRITTEN"]
 
 #: Per written low pair kind: the unit of each value ("A" plane angle, "L" length), in value order.
 VALUE_UNITS = {k: "".join(PAIR_KINDS[k].value_units) for k in WRITTEN_LOW_KINDS}
+#: A generic low-order pair's limits in the order of AP242's low_order_kinematic_pair_with_range
+#: (rotations, then translations), as indices into its values (translations, then rotations).
+_LOW_ORDER_RANGE_ORDER = (3, 4, 5, 0, 1, 2)
+
+
+class NotWritableError(ValueError):
+    """The target layout cannot express a pair of the mechanism (the message names it): the
+    file is not written (exit 1), rather than written without the pair."""
+
 #: The higher pair kinds written (their geometry with them).
 HIGHER_KINDS_WRITTEN = tuple(HIGHER_GEOMETRY)
 #: Every pair kind p105 writes.
@@ -295,9 +305,11 @@ class Emitter:
 
     def orientation(self, ypr):
         """A pair's orientation (yaw, pitch, roll in SI): the typed ypr_rotation, or for Open
-        CASCADE (which reads that select as a real) the equal rotation_about_direction."""
+        CASCADE (which reads that select as a real) the equal rotation_about_direction. The
+        triple written is the canonical one of 5.3.7 (roll 0 at a rectangular pitch: what
+        validate accepts), whatever triple the analysis produced or the user drove."""
         if not self.occt:
-            return typed("ypr_rotation", [self.A(x) for x in ypr])
+            return typed("ypr_rotation", ypr_values(ypr, self.A))
         from p105cli.kinematics.spatial import rotation_vector
         from p105cli.kinematics.placements import ypr_rotation
 
@@ -326,7 +338,10 @@ class Emitter:
 
     def range_args(self, p):
         out = []
-        for unit, lo, hi in zip(VALUE_UNITS[p.kind], p.lower, p.upper):
+        units, lower, upper = VALUE_UNITS[p.kind], p.lower, p.upper
+        if p.kind == "low_order":  # AP242 lists the rotation limits first
+            units, lower, upper = ([seq[i] for i in _LOW_ORDER_RANGE_ORDER] for seq in (units, lower, upper))
+        for unit, lo, hi in zip(units, lower, upper):
             for v in (lo, hi):
                 if self.layout == "1996":
                     if v is None:
@@ -379,6 +394,11 @@ class Emitter:
                                                                  "the file; not written"))
                 ok.append(p)
                 continue
+            if p.kind == "low_order" and self.layout == "1996":
+                flags = ", ".join(f"{f} = {'TRUE' if p.params.get(f, True) else 'FALSE'}" for f in FREEDOM_NAMES)
+                raise NotWritableError(_at(p.ids.get("pair"), f"pair {p.name!r}: a low_order_kinematic_pair with "
+                                           f"{flags} is no named pair (revolute, prismatic, ...), and the 1996 "
+                                           "layout has no generic pair to write it as; not converted"))
             if p.kind not in VALUE_UNITS:
                 self.diags.append(_at(p.ids.get("pair"), f"pair {p.name!r}: {p.kind} pairs are not written "
                                                          "by p105 yet; the pair and its joint are left out"))
@@ -671,10 +691,13 @@ class Emitter:
             self.diags.append(_at(p.ids.get("range"), f"pair {p.name!r}: AP242 has no range for a {p.kind} pair; "
                                                       "its limits are not written"))
             with_range = False
-        plain = f"{p.kind}_pair"
-        ranged = f"{p.kind}_pair_with_range"
+        plain = pair_entity(p.kind, "ap242")
+        ranged = pair_entity(p.kind, "ap242", with_range=True)
         entity = ranged if with_range else plain
-        flags = self.flags(p.kind)
+        if p.kind == "low_order":  # the generic pair's flags are its own, written as they are
+            flags = [TRUE if p.params.get(f, True) else FALSE for f in FREEDOM_NAMES]
+        else:
+            flags = self.flags(p.kind)
         own = self.own_params(p)
         if p.kind in HIGHER_KINDS_WRITTEN:
             range_args = [self.higher_ranges[p.name][0], *self.higher_ranges[p.name][1]] if with_range else []
@@ -687,25 +710,28 @@ class Emitter:
                                   f"pair {p.name!r}: actuation not written (--occt-compat: Open CASCADE does not "
                                   "read the actuated_kinematic_pair complex instance)"))
             actuated = False
-        if actuated and p.kind not in FREEDOM_FLAGS and p.kind not in COUPLED_FREEDOMS:
+        if actuated and p.kind not in FREEDOM_FLAGS and p.kind not in COUPLED_FREEDOMS and p.kind != "low_order":
             self.diags.append(_at(p.ids.get("pair"), f"pair {p.name!r}: actuation not written (which freedoms an "
                                                      f"actuated {p.kind} pair drives is not defined)"))
             actuated = False
         self._reuse("pair", p.name)
         if not actuated:
             return b.add(entity, p.name, name2, p.description, f1, f2, joint, *flags, *own, *range_args)
-        dofs = FREEDOM_FLAGS.get(p.kind) or COUPLED_FREEDOMS[p.kind]
+        if p.kind == "low_order":
+            dofs = tuple(not x for x in p.type.locked(p.params))
+        else:
+            dofs = FREEDOM_FLAGS.get(p.kind) or COUPLED_FREEDOMS[p.kind]
         directions = [enum("bidirectional") if f else enum("not_actuated") for f in dofs]
         parts = [("actuated_kinematic_pair", directions), ("geometric_representation_item", []),
                  ("item_defined_transformation", [DERIVED, p.description, f1, f2]), ("kinematic_pair", [joint]),
                  ("representation_item", [p.name])]
-        if p.kind in FREEDOM_FLAGS:
+        if p.kind in FREEDOM_FLAGS or p.kind == "low_order":
             parts.append(("low_order_kinematic_pair", flags))
         else:
             parts.append(("low_order_kinematic_pair_with_motion_coupling", []))
         if p.kind == "homokinetic":
             parts += [("universal_pair", own), ("homokinetic_pair", [])]
-        else:
+        elif p.kind != "low_order":  # the generic pair is the low_order_kinematic_pair part itself
             parts.append((plain, own))
         if with_range:
             parts.append((ranged, range_args))

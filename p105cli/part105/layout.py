@@ -82,6 +82,16 @@ class MechanismLayout:
     values: dict = field(default_factory=dict)     # pair id -> initial pair value id
     link_names: dict = field(default_factory=dict)  # link id -> name
     base_placement: Optional[tuple] = None          # (operator, rep of its units 1, rep 2) or None
+    _pair_frames: Optional[dict] = field(default=None, repr=False, compare=False)
+
+    def pair_frames(self, link) -> set:
+        """The pair frames on ``link`` (built once for all links: a long chain asks for each)."""
+        if self._pair_frames is None:
+            self._pair_frames = {}
+            for p in self.pairs:
+                self._pair_frames.setdefault(p.link1, set()).add(p.frame_1)
+                self._pair_frames.setdefault(p.link2, set()).add(p.frame_2)
+        return self._pair_frames.get(link, set())
 
     @property
     def link_order(self) -> list:
@@ -191,7 +201,7 @@ def link_frames(mf: ModelFile, ml: MechanismLayout, link) -> dict:
     rep = ml.links.get(link)
     if rep is None:
         return {}
-    used = {p.frame_1 for p in ml.pairs if p.link1 == link} | {p.frame_2 for p in ml.pairs if p.link2 == link}
+    used = ml.pair_frames(link)
     items = [i for i in mf.refs(rep, "items")
              if i not in used and mf.is_a(i, "axis2_placement_3d", "su_parameters")]
     names = unique_names({i: mf.string(i, "name") or f"#{i}" for i in items})

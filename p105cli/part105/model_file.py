@@ -85,9 +85,13 @@ def take_deviations(doc) -> list:
         found = doc._deviations
     else:
         found = getattr(doc, "_part105_deviations", None) or {}
-    out = [f"#{i}: {m}" if i is not None else m for i, m in found]
+    out = _deviation_texts(found)
     found.clear()
     return out
+
+
+def _deviation_texts(found: dict) -> list:
+    return [f"#{i}: {m}" if i is not None else m for i, m in found]
 
 
 def open_population(doc, profile=None):
@@ -244,8 +248,14 @@ class ModelFile:
 
     def deviation(self, iid, message: str) -> None:
         """Record that ``#iid`` departs from the schema in the way ``message`` says (the rule it
-        breaks, and how it is read anyway); the same deviation is recorded once."""
+        breaks, and how it is read anyway; a pair value projected onto its pair's freedoms); the
+        same deviation is recorded once."""
         self._deviations.setdefault((iid, message), None)
+
+    def deviations(self) -> list:
+        """The deviations recorded so far and not taken (:func:`take_deviations`), each as
+        ``#id: message``, in the order found."""
+        return _deviation_texts(self._deviations)
 
     # ---------------------------------------------------------------- basics
     def __contains__(self, i) -> bool:

@@ -9,6 +9,13 @@ Families (ISO 10303-105 5.5; both layouts write them alike):
 * spherical pairs (with or without pin): ``input_orientation``, a ypr_rotation or a
   rotation_about_direction (converted by 5.5.9), as yaw, pitch, roll;
 * the unconstrained pair: ``actual_placement`` as x, y, z, yaw, pitch, roll;
+* AP242's ``low_order_kinematic_pair_value`` (any low-order pair may have one: the revolute,
+  prismatic, ... pairs are subtypes of ``low_order_kinematic_pair`` there) is read by its own
+  type: its six components (tx, ty, tz, rx, ry, rz) give the pair's values through
+  ``kinematics.pairs.low_order_components`` (the one table); a component the pair's
+  freedoms lock that is not 0 is left out with a warning naming the value (the value
+  projected onto the pair's freedoms, :meth:`ModelFile.deviation`); on a pair without
+  low-order freedoms (screw, gear, rack and pinion, higher pairs) it is an error;
 * higher pairs: points on the pair's curves/surfaces (``point_on_curve`` /
   ``point_on_surface`` on the pair's geometry, their parameters converted with the Part 42
   parameter units of the curve or surface) and their ypr or rotation.
@@ -40,6 +47,10 @@ def is_angle(value_name: str) -> bool:
 
 _is_angle = is_angle
 
+#: A component of a low-order value below this (SI: m or rad) is 0: a projection that drops
+#: it changes nothing worth a warning.
+_LOCKED_COMPONENT = 1e-12
+
 
 class PairValueFormat:
     """Reads ``*_pair_value`` instances of one model file in SI."""
@@ -54,6 +65,8 @@ class PairValueFormat:
     def _value(self, v, pair, s: ContextScale, geometry: dict) -> tuple:
         d = self.d
         kind = pair.kind
+        if d.is_a(v, "low_order_kinematic_pair_value"):  # read by the value's type, not the pair's
+            return self._low_order(v, pair, s)
         if kind in ("spherical", "spherical_with_pin"):
             return self._ypr(v, s)
         if kind == "unconstrained":
@@ -68,6 +81,36 @@ class PairValueFormat:
             x = d.number(v, name)
             out.append(x * (s.angle if _is_angle(name) else s.length))
         return tuple(out)
+
+    def _low_order(self, v, pair, s: ContextScale) -> tuple:
+        """A low_order_kinematic_pair_value as the values of ``pair``: its components through
+        the pair's freedoms; locked components that are not 0 are projected away (warning)."""
+        from ..kinematics.pairs import LOW_ORDER, LOW_ORDER_NAMED, low_order_components
+
+        d = self.d
+        kind = pair.kind
+        params = getattr(pair, "params", None) or {}
+        x = [d.number(v, n) * (s.angle if _is_angle(n) else s.length) for n in LOW_ORDER.value_names]
+        if kind == "low_order":
+            locked = LOW_ORDER.locked(params)
+            comps = tuple(i for i in range(6) if not locked[i])
+        elif kind in LOW_ORDER_NAMED:
+            comps = low_order_components(kind, params.get("layout", "ap242"))
+        else:
+            raise model_error(v, f"low_order_kinematic_pair_value applies to a {kind} pair, which has no "
+                                 "low-order freedoms (t_x .. r_z) to read it by; write its own "
+                                 f"{kind}_pair_value")
+        dropped = [i for i in range(6) if i not in comps and abs(x[i]) > _LOCKED_COMPONENT]
+        if dropped:
+            pair_id = d.ref_value(v, "applies_to_pair")
+            said = ", ".join(f"{LOW_ORDER.value_names[i]} = {d.number(v, LOW_ORDER.value_names[i]):g}"
+                             for i in dropped)
+            d.deviation(v, f"low_order_kinematic_pair_value gives {said}, which the {kind} pair "
+                               f"#{pair_id} cannot move (its freedoms lock it); read as 0 (the value "
+                               "projected onto the pair's freedoms)")
+        if kind == "low_order":
+            return tuple(x[i] if i in comps else 0.0 for i in range(6))
+        return tuple(x[i] for i in comps)
 
     def _ypr(self, v, s: ContextScale) -> tuple:
         d = self.d
@@ -188,8 +231,54 @@ def on_curve(t_si: float, obj) -> float:
 # the bytes of both stay as they were.
 
 def value_entity(kind: str) -> str:
-    """The ``*_pair_value`` entity of a pair kind (a homokinetic pair's is universal_pair_value)."""
+    """The ``*_pair_value`` entity of a pair kind (a homokinetic pair's is universal_pair_value,
+    AP242's generic pair's low_order_kinematic_pair_value)."""
+    if kind == "low_order":
+        return "low_order_kinematic_pair_value"
     return "universal_pair_value" if kind == "homokinetic" else f"{kind}_pair_value"
+
+
+def is_generic_low_order(mf: ModelFile, pair_id) -> bool:
+    """Whether pair ``#pair_id`` is AP242's generic low_order_kinematic_pair (whatever kind its
+    flags make it): its values are low_order_kinematic_pair_value (the named pairs' value
+    entities apply only to the named pair entities)."""
+    from .catalogue import GENERIC_LOW_ORDER
+
+    try:
+        return bool(mf.leaf_types(pair_id) & GENERIC_LOW_ORDER)
+    except (KeyError, TypeError):
+        return False
+
+
+def low_order_components_of(kind: str, q, layout: str = "ap242") -> tuple:
+    """A low-order pair's values ``q`` (SI, in the kind's value order) as the six components
+    (tx, ty, tz, rx, ry, rz) of a low_order_kinematic_pair_value; the reading's inverse."""
+    from ..kinematics.pairs import low_order_components
+
+    if kind == "low_order":
+        return tuple(float(x) for x in q)
+    out = [0.0] * 6
+    for c, x in zip(low_order_components(kind, layout), q):
+        out[c] = float(x)
+    return tuple(out)
+
+
+def low_order_value_arguments(kind: str, rest: list, layout: str = "ap242"):
+    """A low_order_kinematic_pair_value's arguments after its pair (file units) as the value
+    of a named ``kind`` pair: ``(entity, arguments)``, or None when the kind's value is no
+    list of numbers and angles (an unconstrained pair's placement, a fully constrained pair's
+    nothing). Locked components are left out (the reading's projection)."""
+    from ..kinematics.pairs import LOW_ORDER_NAMED, low_order_components
+    from .builder import typed
+
+    if kind == "low_order":
+        return value_entity(kind), list(rest)
+    if kind not in LOW_ORDER_NAMED or kind in ("unconstrained", "fully_constrained"):
+        return None
+    picked = [rest[c] for c in low_order_components(kind, layout)]
+    if kind in ("spherical", "spherical_with_pin"):
+        return value_entity(kind), [typed("ypr_rotation", picked)]
+    return value_entity(kind), picked
 
 
 def value_arguments(layout: str, name: str, pair_ref, values) -> list:
@@ -204,6 +293,16 @@ def scalar_values(units, q, angle, length) -> list:
     return [angle(x) if u == "A" else length(x) for u, x in zip(units, q)]
 
 
+def ypr_values(ypr, angle) -> list:
+    """A ``ypr_rotation``'s three values in the file (``angle(x)`` from radians): THE way p105
+    writes a ypr triple. It is the canonical triple of 5.3.7
+    (:func:`p105cli.kinematics.placements.canonical_ypr`: roll 0 at a rectangular pitch),
+    whatever triple the analysis produced or the user drove, so validate accepts it."""
+    from p105cli.kinematics.placements import canonical_ypr
+    from .catalogue import YPR_REL_TOL
+    return [angle(x) for x in canonical_ypr(*ypr, YPR_REL_TOL)]
+
+
 def value_attributes(mf: ModelFile, v) -> tuple:
     """``(pair id, [raw value of each of the value entity's own attributes, in order])`` of pair
     value ``#v``, in file units (what a converter copies into the other layout); the pair id is
@@ -214,4 +313,5 @@ def value_attributes(mf: ModelFile, v) -> tuple:
     return mf.ref_value(v, "applies_to_pair"), own
 
 
-__all__ += ["value_entity", "value_arguments", "scalar_values", "value_attributes"]
+__all__ += ["value_entity", "is_generic_low_order", "low_order_components_of", "low_order_value_arguments",
+            "value_arguments", "scalar_values", "ypr_values", "value_attributes"]

@@ -88,6 +88,7 @@ import numpy as np
 from ..kinematics import placements as pl
 from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
+from ..kinematics.pairs import FREEDOM_NAMES, LOW_ORDER, low_order_components, named_low_order
 from ..schema.model import Literal
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
@@ -95,8 +96,8 @@ from ..schema.values import number as _num
 from ..step.errors import ModelError
 from . import geometry
 from . import layout as lay
-from .catalogue import GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, pair_kind_of_entity, \
-    range_on_values
+from .catalogue import GENERIC_LOW_ORDER, GEOMETRY_ATTRIBUTES, HIGHER_KINDS, RANGE_ON, limit_attributes, \
+    pair_kind_of_entity, range_on_values
 from .model_file import ContextScale, ModelFile, model_error
 from .pair_values import PairValueFormat, is_angle as _is_angle, on_curve, surface_parameter_factors
 
@@ -145,6 +146,7 @@ class _Reader:
         d = self.d
         p = pl_.id
         kind, entity = self._pair_kind(p)
+        generic = entity in GENERIC_LOW_ORDER and kind != "low_order"  # a named pair's flags
         f1, f2 = pl_.frame_1, pl_.frame_2
         s1, s2 = d.scale(pl_.rep_1), d.scale(pl_.rep_2)
         P1 = d.placement(f1, s1)
@@ -158,7 +160,7 @@ class _Reader:
             ids["relationship"] = pl_.relationship
         if self.layout == "ap242":
             self._explicit_derived(p, entity)
-        params = self._params(p, kind, s1)
+        params = self._params(p, kind, s1, generic)
         for key, f, sc in (("su_1", f1, s1), ("su_2", f2, s2)):
             if d.is_a(f, "su_parameters"):  # kept so that a writer can give the frame back as written
                 params[key] = d.su(f, sc)
@@ -170,7 +172,8 @@ class _Reader:
                 params["orientation"] = _is_true(d.get(p, "orientation"))
         lower = upper = ()
         if pl_.range is not None:
-            lower, upper = self._limits(pl_.range, kind, s1, geometry)
+            lower, upper = self._limits(pl_.range, kind, s1, geometry,
+                                        self._generic_names(kind) if generic else None)
         ordered = {k: ids[k] for k in ("pair", "joint", "frame_1", "frame_2", "curve", "surface", "curve_1",
                                        "curve_2", "surface_1", "surface_2", "range", "actuator",
                                        "relationship") if k in ids}
@@ -209,6 +212,8 @@ class _Reader:
         names = sorted(n for n in d.leaf_types(p) if n != "actuated_kinematic_pair")
         for n in names:
             k = pair_kind_of_entity(n)
+            if k == "low_order":  # AP242's generic pair: its flags say which pair it is
+                k = named_low_order(self._flags(p)) or k
             if k is not None:
                 return k, n
         # a supertype name that is a pair (e.g. an instance of a subtype we do not know)
@@ -226,7 +231,7 @@ class _Reader:
         conflicts = []
         derived = _derived_flags(d.schema, entity)
         if derived is not None:
-            raw = [d.get(p, f"low_order_kinematic_pair.{f}", None) for f in _FLAG_NAMES]
+            raw = [d.get(p, f"low_order_kinematic_pair.{f}", None) for f in FREEDOM_NAMES]
             if any(v is not None and not (type(v) is dict and v.get("derived")) for v in raw):
                 written.append("the freedom flags t_x .. r_z")
                 says = tuple(_is_true(v) for v in raw)
@@ -247,9 +252,23 @@ class _Reader:
                 d.deviation(p, f"{d.label(p)} writes {' and '.join(written)} where AP242 derives them (*); "
                             "the values agree with the derivation (read anyway)")
 
-    def _params(self, p, kind, s: ContextScale) -> dict:
+    def _flags(self, p) -> tuple:
+        """The freedom flags (t_x, ..., r_z) of a generic low_order_kinematic_pair."""
+        return tuple(_is_true(self.d.get(p, f"low_order_kinematic_pair.{f}")) for f in FREEDOM_NAMES)
+
+    def _generic_names(self, kind) -> tuple:
+        """The generic low-order value (and limit) names that give a ``kind`` pair's values."""
+        return tuple(LOW_ORDER.value_names[c] for c in low_order_components(kind, self.layout))
+
+    def _params(self, p, kind, s: ContextScale, generic: bool = False) -> dict:
         d = self.d
         out: dict = {}
+        if generic:  # a generic pair read as the named pair of its flags: no attributes of its own
+            if kind in ("universal", "homokinetic"):
+                out["input_skew_angle"] = None
+            elif kind == "prismatic":
+                out["layout"] = self.layout
+            return out
         if kind == "prismatic":
             out["layout"] = self.layout
         elif kind == "screw":
@@ -264,14 +283,15 @@ class _Reader:
         elif kind == "rack_and_pinion":
             out["pinion_radius"] = d.number(p, "pinion_radius") * s.length
         elif kind == "low_order":  # AP242's generic pair: which of its six freedoms are free
-            for f in ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z"):
-                out[f] = _is_true(d.get(p, f"low_order_kinematic_pair.{f}"))
+            out.update(zip(FREEDOM_NAMES, self._flags(p)))
         elif kind in ("universal", "homokinetic"):
             x = d.number(p, "input_skew_angle", optional=True)
             out["input_skew_angle"] = None if x is None else x * s.angle
         return out
 
-    def _limits(self, holder, kind, s: ContextScale, geometry: dict) -> tuple:
+    def _limits(self, holder, kind, s: ContextScale, geometry: dict, limit_names=None) -> tuple:
+        """Per value (lower, upper) limits; ``limit_names``: the value names whose limit
+        attributes bound them, when not the kind's own (a generic low-order pair's)."""
         from ..kinematics.pairs import PAIR_KINDS
 
         d = self.d
@@ -291,13 +311,13 @@ class _Reader:
                                   self._parameter_range(holder, attr, rng, geometry[spec.geometry])):
                 on[vname] = lim
         lower, upper = [], []
-        for v in value_names:
+        for v, bounded in zip(value_names, limit_names or value_names):
             lo = hi = None
             if v in on:
                 lo, hi = on[v]
-            ab = limit_attributes(v)
+            ab = limit_attributes(bounded)
             if ab is not None and ab[0] in names and ab[1] in names:
-                f = s.angle if _is_angle(v) else s.length
+                f = s.angle if _is_angle(bounded) else s.length
                 lo = self._limit(holder, ab[0], f)
                 hi = self._limit(holder, ab[1], f)
             lower.append(lo)
@@ -439,9 +459,6 @@ class _Reader:
                          description=ml.description, ids=dict(ml.ids))
 
 
-_FLAG_NAMES = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
-
-
 def _derived_flags(schema, entity: str) -> Optional[tuple]:
     """The freedom flags (t_x .. r_z) the schema's DERIVE clauses give ``entity`` (its own or a
     supertype's), None when it derives none (the generic low_order_kinematic_pair states them)."""
@@ -456,7 +473,7 @@ def _derived_flags(schema, entity: str) -> Optional[tuple]:
             if a.supertype == "low_order_kinematic_pair" and isinstance(a.expr, Literal):
                 found.setdefault(a.name, a.expr.value is True)  # the most specific clause wins
         todo.extend(e.supertypes)
-    return tuple(found[f] for f in _FLAG_NAMES) if all(f in found for f in _FLAG_NAMES) else None
+    return tuple(found[f] for f in FREEDOM_NAMES) if all(f in found for f in FREEDOM_NAMES) else None
 
 
 def _motion_words(flags: tuple) -> str:

@@ -55,7 +55,10 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
     exactly when a resulting path is there). Returns ``(document, notes)``."""
     from p105cli.step.jsonmodel import extended
 
-    from .pair_values import scalar_values, value_arguments, value_entity
+    from p105cli.kinematics.pairs import LOW_ORDER
+
+    from .pair_values import is_generic_low_order, low_order_components_of, scalar_values, value_arguments, \
+        value_entity, ypr_values
 
     from .model_file import ModelFile
 
@@ -94,8 +97,12 @@ def add_results(doc, mech, Q, t, status, *, paths=(), pl=None):
         if pair_ref is None:
             raise ValueError(f"pair {p.name!r} has no instance in the model")
         conv = scalar_values(p.type.value_units, q, lambda x: float(x) / af, lambda x: float(x) / lf)
+        if is_generic_low_order(model_file(), pair_ref):  # a generic pair's value, whatever its flags name
+            vals = scalar_values(LOW_ORDER.value_units, low_order_components_of(p.kind, q, layout),
+                                 lambda x: float(x) / af, lambda x: float(x) / lf)
+            return new(value_entity("low_order"), value_arguments(layout, p.name, {"ref": pair_ref}, vals))
         if p.kind == "spherical":
-            vals = [{"type": "YPR_ROTATION", "value": conv}]
+            vals = [{"type": "YPR_ROTATION", "value": ypr_values(q, lambda x: float(x) / af)}]
         elif p.kind == "unconstrained":
             M = p.motion(np.asarray(q, dtype=np.float64))
             o = new("cartesian_point", [f"{p.name} value", [float(x) / lf for x in M[:3, 3]]])

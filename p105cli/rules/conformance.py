@@ -29,8 +29,9 @@ Rule ids (stable; ``severity`` is ``error`` unless said otherwise)
 =====================  =====================================================
 rule                   what it checks
 =====================  =====================================================
-SCH-UNKNOWN-ENTITY     (warning) a simple instance whose entity type is not
-                       in the schema; nothing else is checked for it
+SCH-UNKNOWN-ENTITY     a simple instance whose entity type is not in the
+                       schema; nothing else is checked for it (the analysis
+                       commands read such files leniently; the gate does not)
 SCH-ABSTRACT           an ABSTRACT entity instantiated without one of its
                        subtypes (a simple instance of it, or a part of a
                        complex instance with no subtype among the parts)
@@ -39,8 +40,11 @@ SCH-ARITY              a simple instance whose number of parameters differs
                        then not checked)
 SCH-DERIVED            ``*`` where the attribute is not re-declared as
                        DERIVE (in the instance's type or a part of a complex
-                       instance); a derived slot holding anything but ``*``;
-                       ``*`` inside an aggregate
+                       instance); ``$`` in a derived slot; ``*`` inside an
+                       aggregate. An explicit value in a derived slot is not
+                       checked here: ``rules/derived.py`` compares it with
+                       the derivation (``SCH-DERIVED-EXPLICIT`` when equal,
+                       ``SCH-DERIVED-CONFLICT`` when not)
 SCH-OPTIONAL           ``$`` for an attribute that is not OPTIONAL (after
                        redeclarations), or as an aggregate element other
                        than in ``ARRAY OF OPTIONAL``
@@ -125,7 +129,8 @@ RULES = {  # one sentence each, ready for diagnostics.register_rule
     UNKNOWN_ENTITY: "An entity instance's type is not an entity of the schema.",
     ABSTRACT: "An ABSTRACT entity is instantiated without one of its subtypes.",
     ARITY: "An entity instance has the wrong number of attributes for its EXPRESS type.",
-    DERIVED: "'*' is written for an explicit attribute, or a derived attribute is not '*'.",
+    DERIVED: "'*' is written for an explicit attribute, '$' for a derived one, or '*' inside an "
+             "aggregate.",
     OPTIONAL: "'$' is written for an attribute or aggregate element that is not OPTIONAL.",
     TYPE: "An attribute value does not fit its declared EXPRESS type.",
     DANGLING: "An attribute refers to an entity instance that is not in the file.",
@@ -297,11 +302,13 @@ class Checker:
         }
 
     # ---------------------------------------------------------- public
-    def check(self, record: dict, types_of: TypesOf) -> list:
+    def check(self, record: dict, types_of: TypesOf, derived_values: Optional[set] = None) -> list:
+        """The findings of one record; the id of a record that writes a value in a derived
+        slot is added to ``derived_values`` (for ``rules/derived.py``)."""
         iid = record.get("id")
         complex_parts = record.get("complex")
         if complex_parts is not None:
-            return self._check_complex(iid, complex_parts, types_of)
+            return self._check_complex(iid, complex_parts, types_of, derived_values)
         etype = record.get("type")
         plan = self._plans.get(etype)
         if plan is None:
@@ -316,7 +323,7 @@ class Checker:
                                f"({', '.join(map(_slot_str, slots))}), found {len(args)}",
                                iid, etype))
             return out
-        self._check_slots(slots, args, types_of, out, iid, etype, "")
+        self._check_slots(slots, args, types_of, out, iid, etype, "", derived_values)
         return out
 
     def closure(self, name: str) -> frozenset:
@@ -331,7 +338,8 @@ class Checker:
         return c
 
     # ---------------------------------------------------------- slots
-    def _check_slots(self, slots, args, types_of, out, iid, etype, prefix) -> None:
+    def _check_slots(self, slots, args, types_of, out, iid, etype, prefix,
+                     derived_values=None) -> None:
         for slot, v in zip(slots, args):
             if v is None:
                 if slot.derived:
@@ -341,26 +349,23 @@ class Checker:
                     out.append(Finding(OPTIONAL, ERROR, f"{slot.name} is not OPTIONAL: $ not allowed",
                                        iid, etype, prefix + slot.name))
                 continue
+            if slot.derived:
+                # an explicit value where the schema derives: whether it equals the
+                # derivation needs the evaluator (rules/derived.py), not this check
+                if derived_values is not None and not (type(v) is dict and v.get("derived") is True):
+                    derived_values.add(iid)
+                continue
             tv = type(v)
             if tv in slot.fast:
-                if slot.derived:
-                    out.append(Finding(DERIVED, ERROR, f"{slot.name} is derived (re-declared as "
-                                       f"DERIVE): write *, not {_show(v)}", iid, etype,
-                                       prefix + slot.name))
                 continue
             if tv is dict and v.get("derived") is True:
-                if not slot.derived:
-                    out.append(Finding(DERIVED, ERROR, f"{slot.name} is an explicit attribute: "
-                                       f"* is only for derived ones", iid, etype, prefix + slot.name))
-                continue
-            if slot.derived:
-                out.append(Finding(DERIVED, ERROR, f"{slot.name} is derived (re-declared as DERIVE): "
-                                   f"write *, not {_show(v)}", iid, etype, prefix + slot.name))
+                out.append(Finding(DERIVED, ERROR, f"{slot.name} is an explicit attribute: "
+                                   f"* is only for derived ones", iid, etype, prefix + slot.name))
                 continue
             errs: list = []
             slot.validator(v, types_of, errs)
             for rule, msg in errs:
-                out.append(Finding(rule, ERROR, f"{slot.name}: {msg}", iid, etype, prefix + slot.name))
+                out.append(Finding(rule, ERROR, msg, iid, etype, prefix + slot.name))
 
     def _slot(self, name, optional, derived, tspec) -> _Slot:
         val = self.compile(tspec)
@@ -370,7 +375,7 @@ class Checker:
     def _simple_plan(self, etype: str) -> _Plan:
         schema = self.schema
         if etype not in schema.entities:
-            return _Plan(etype, [(UNKNOWN_ENTITY, WARNING,
+            return _Plan(etype, [(UNKNOWN_ENTITY, ERROR,
                                   f"{etype} is not an entity of schema {schema.name}")])
         static = []
         if self._is_abstract(etype):
@@ -414,7 +419,7 @@ class Checker:
         return out
 
     # ---------------------------------------------------------- complex
-    def _check_complex(self, iid, parts: list, types_of: TypesOf) -> list:
+    def _check_complex(self, iid, parts: list, types_of: TypesOf, derived_values=None) -> list:
         key = tuple(p.get("type") for p in parts)
         plan = self._complex_plans.get(key)
         if plan is None:
@@ -433,7 +438,7 @@ class Checker:
                                    f"{', '.join(map(_slot_str, slots)) or 'none'}), found {len(args)}",
                                    iid, label, pname))
                 continue
-            self._check_slots(slots, args, types_of, out, iid, label, pname + ".")
+            self._check_slots(slots, args, types_of, out, iid, label, pname + ".", derived_values)
         return out
 
     def _complex_plan(self, names: tuple) -> _Plan:
@@ -909,12 +914,13 @@ def check_instance(record: dict, schema: Schema, types_of: TypesOf) -> list:
     return checker_for(schema).check(record, types_of)
 
 
-def check_population(records: Iterable[dict], schema: Schema,
-                     types_of: TypesOf) -> Iterator[Finding]:
-    """The findings of every instance, in the order of ``records``."""
+def check_population(records: Iterable[dict], schema: Schema, types_of: TypesOf,
+                     derived_values: Optional[set] = None) -> Iterator[Finding]:
+    """The findings of every instance, in the order of ``records``; the ids of the
+    instances that write a value in a derived slot are added to ``derived_values``."""
     check = checker_for(schema).check
     for record in records:
-        yield from check(record, types_of)
+        yield from check(record, types_of, derived_values)
 
 
 def step_types_of(step_file, schema: Schema) -> TypesOf:

@@ -137,7 +137,7 @@ import math
 from typing import Optional
 
 from ..part105 import layout
-from ..part105.catalogue import KINEMATIC_ENTITIES, LIMITS, RANGE_ON, YPR_NAMES
+from ..part105.catalogue import KINEMATIC_ENTITIES, LIMITS, RANGE_ON, YPR_NAMES, YPR_REL_TOL
 from ..part105.model_file import MISSING, ModelFile
 from ..schema.units import ANGLE, KIND_SYMBOL as _KIND_SYMBOL, LENGTH, ContextUnits, UnitReader
 from ..schema.values import enum, is_false, is_unlimited, number, ref, untyped
@@ -197,7 +197,7 @@ _PERIODIC_U = ("cylindrical_surface", "conical_surface", "spherical_surface", "t
 _PERIODIC_V = ("toroidal_surface",)
 
 RANGE_TOL = 1e-9     # relative, value against limit (same unit on both sides)
-YPR_TOL = 1e-6       # relative, ypr angle against +-pi, +-pi/2
+YPR_TOL = YPR_REL_TOL  # relative, ypr angle against +-pi, +-pi/2 (the writer's canonical_ypr uses it too)
 ORTHO_TOL = 1e-6     # |cos| between axes that should be orthogonal
 FACTOR_TOL = 1e-9    # relative difference of two SI factors that still agree
 

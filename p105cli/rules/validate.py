@@ -21,22 +21,27 @@ What is checked, in order:
 from __future__ import annotations
 
 import linecache
+from itertools import chain
 from pathlib import Path
 
 from p105cli.part105.catalogue import KINEMATIC_ENTITIES
 from p105cli.step.values import record_refs
 
 from .conformance import RULES as CONFORMANCE_RULES
-from .conformance import check_population
+from .conformance import UNKNOWN_ENTITY, check_population
+from .derived import RULES as DERIVED_RULES
+from .derived import check_derived
 from .diagnostics import NOT_EVALUATED, Diagnostic, RunResult, register_rule
 from .kinematics import RULES as KINEMATICS_RULES
 from .kinematics import check_kinematics
 
-for _rule, _text in {**CONFORMANCE_RULES, **KINEMATICS_RULES}.items():
+for _rule, _text in {**CONFORMANCE_RULES, **DERIVED_RULES, **KINEMATICS_RULES}.items():
     register_rule(_rule, _text)
 register_rule("P21-SYNTAX", "The exchange structure is not valid ISO 10303-21 syntax.")
 register_rule("P21-STRUCTURE", "The exchange structure repeats an instance name or is otherwise unusable.")
 register_rule("P21-WARNING", "The reader accepted something the ISO 10303-21 grammar does not allow.")
+register_rule("P21-ENCODING", "Raw 8-bit bytes that are not UTF-8 were read as ISO 8859-1: their "
+                              "characters may be wrong.")
 register_rule("P21-SCHEMA", "FILE_SCHEMA names no schema p105 knows; give one with --schema.")
 
 
@@ -106,7 +111,7 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
     import time
 
     from p105cli.schema.population import Population
-    from p105cli.schema.profiles import profile_for_header
+    from p105cli.schema.profiles import profile_for_header, stand_in_for
 
     started = time.perf_counter()
     profile = profile_for_header(doc.header, schema)
@@ -114,17 +119,33 @@ def validate_document(doc, source: str, schema: str | None = None, timings: bool
     v = Validation(source, doc)
 
     text = getattr(doc, "text", None)
+    encoding = getattr(doc, "not_utf8", None)
+    summary = encoding.summary() if encoding is not None else None
     for message, offset in getattr(doc, "warnings", ()):
+        if (message, offset) == summary:
+            continue  # the reader's one-line summary: the lines follow as P21-ENCODING
         line, col = doc.line_col(offset) if text is not None else (None, None)
         v.add("P21-WARNING", "warning", message, line=line, column=col)
+    if encoding is not None:
+        for message, offset in encoding.details(text):
+            line, col = doc.line_col(offset)
+            v.add("P21-ENCODING", "warning", message, line=line, column=col)
 
     def types_of(iid):  # conformance's contract: None for a dangling reference
         return pop.types_of(iid) if iid in pop else None
 
-    for f in check_population(doc.records(), profile.schema, types_of):
+    stand_in = stand_in_for(doc.header, profile)
+    writes_derived: set = set()  # instances with a value in a derived slot
+    findings = list(check_population(doc.records(), profile.schema, types_of, writes_derived))
+    for f in chain(findings, check_derived(pop, writes_derived)):
         line, col = v.position(pop, f.entity) if f.entity is not None else (None, None)
         message = f"{f.attribute}: {f.message}" if f.attribute else f.message
-        v.add(f.rule, f.severity, message, f.entity, f.entity_type, line, col)
+        severity = f.severity
+        if stand_in is not None and f.rule == UNKNOWN_ENTITY:
+            # p105 has no long form of the declared schema: it may well know the type
+            severity = "warning"
+            message += f" ({stand_in}, which FILE_SCHEMA declares, is read as {profile.standard})"
+        v.add(f.rule, severity, message, f.entity, f.entity_type, line, col)
 
     _evaluate_rules(pop, profile, v)
 
@@ -207,7 +228,8 @@ def _evaluate_rules(pop, profile, v: Validation) -> None:
 def list_rules(profile) -> list[tuple[str, str]]:
     """Every rule id the profile's schema can report, with its EXPRESS source."""
     schema = profile.schema
-    out = [(rule, text) for rule, text in sorted({**CONFORMANCE_RULES, **KINEMATICS_RULES}.items())]
+    out = [(rule, text) for rule, text in sorted({**CONFORMANCE_RULES, **DERIVED_RULES,
+                                                  **KINEMATICS_RULES}.items())]
     for name in sorted(schema.entities):
         entity = schema.entities[name]
         for w in entity.where:

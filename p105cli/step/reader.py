@@ -68,6 +68,73 @@ class DataSection:
     count: int
 
 
+class Latin1Text(str):
+    """Text decoded as ISO 8859-1 because its bytes are not UTF-8 (see :func:`decode_bytes`):
+    each character U+0080..U+00FF stands for one raw 8-bit byte of the file."""
+
+    __slots__ = ()
+
+
+_HIGH = re.compile("[\x80-\xff]+")
+
+
+@dataclass(frozen=True)
+class NotUtf8:
+    """The raw 8-bit bytes of a file that is not UTF-8, read as ISO 8859-1 characters.
+
+    ISO 10303-21 strings hold the characters 32-126 and reach the others through the
+    control directives (\\S\\, \\X\\hh, \\X2\\...\\X0\\, \\X4\\...\\X0\\);
+    edition 3 also allows UTF-8. Raw bytes of another encoding (GBK from SolidWorks,
+    Windows-1252) are neither: their characters cannot be known, so they are kept as
+    ISO 8859-1 (byte for byte) and reported. ``count``: how many bytes; ``runs``: (offset,
+    length) of the first run of them on each line (at most MAX_WARNINGS lines)."""
+
+    count: int
+    runs: tuple
+
+    def summary(self) -> tuple[str, int]:
+        """The one warning of a file (message, offset of the first byte)."""
+        n = self.count
+        return (f"not UTF-8: {n} raw 8-bit byte{'s' if n != 1 else ''} (the first here) read "
+                f"as ISO 8859-1, so the characters of the strings that hold them may be wrong "
+                f"(ISO 10303-21 writes them as \\X2\\...\\X0\\)", self.runs[0][0])
+
+    def details(self, text: str):
+        """(message, offset) of the first run of raw bytes on each line."""
+        for offset, length in self.runs:
+            shown = text[offset:offset + min(length, 8)]
+            hexes = " ".join(f"{ord(c):02X}" for c in shown) + (" ..." if length > 8 else "")
+            yield (f"raw 8-bit byte{'s' if length != 1 else ''} {hexes} not UTF-8, read as "
+                   f"ISO 8859-1 {shown!r}{_as_gbk(text[offset:offset + length])}: write the "
+                   f"characters as \\X2\\...\\X0\\"), offset
+
+
+def _as_gbk(run: str) -> str:
+    """A hint when the bytes read as GBK (SolidWorks' Chinese exports), else ''."""
+    if len(run) > 32 or len(run) % 2:
+        return ""
+    try:
+        return f" (as GBK: {run.encode('latin-1').decode('gbk')!r})"
+    except UnicodeDecodeError:
+        return ""
+
+
+def not_utf8(text: str) -> NotUtf8 | None:
+    """What :class:`NotUtf8` says of ``text``; None unless it is a :class:`Latin1Text`."""
+    if not isinstance(text, Latin1Text):
+        return None
+    count = 0
+    runs: list = []
+    last_line_end = -1
+    for m in _HIGH.finditer(text):
+        count += m.end() - m.start()
+        if m.start() > last_line_end and len(runs) < MAX_WARNINGS:
+            runs.append((m.start(), m.end() - m.start()))
+            nl = text.find("\n", m.end())
+            last_line_end = len(text) if nl < 0 else nl
+    return NotUtf8(count, tuple(runs)) if count else None
+
+
 @dataclass
 class StepFile:
     """An indexed exchange structure. Instances are decoded on demand."""
@@ -82,6 +149,9 @@ class StepFile:
     # Warnings beyond MAX_WARNINGS are only counted: a 100 MB string of
     # stray backslashes must not need gigabytes of warning records.
     warnings_dropped: int = 0
+    # Raw 8-bit bytes that are not UTF-8 (one summary among ``warnings``; validate
+    # reports each line).
+    not_utf8: NotUtf8 | None = None
 
     def _warn(self, message: str, offset: int) -> None:
         if len(self.warnings) < MAX_WARNINGS:
@@ -147,13 +217,14 @@ def _attach(err: StepError, text: str, source: str) -> None:
 
 
 def decode_bytes(raw: bytes) -> str:
-    """Text of a Part 21 file: UTF-8 (edition 3), else ISO 8859-1 (older writers)."""
+    """Text of a Part 21 file: UTF-8 (edition 3), else ISO 8859-1 byte for byte, as a
+    :class:`Latin1Text` so that the reader reports the bytes (:class:`NotUtf8`)."""
     if raw.startswith(b"\xef\xbb\xbf"):
         raw = raw[3:]
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError:
-        return raw.decode("latin-1")
+        return Latin1Text(raw.decode("latin-1"))
 
 
 def read_step(text: str, source: str = "<input>") -> StepFile:
@@ -261,4 +332,8 @@ def _read(text: str, source: str) -> StepFile:
     if rest < len(text):
         warn("text after END-ISO-10303-21; ignored", rest)
     index.finish()
-    return StepFile(text, source, header_to_json(entities), sections, index, other, warnings, dropped)
+    encoding = not_utf8(text)
+    if encoding is not None:
+        warnings.insert(0, encoding.summary())
+    return StepFile(text, source, header_to_json(entities), sections, index, other, warnings, dropped,
+                    encoding)

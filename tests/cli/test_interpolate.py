@@ -30,6 +30,11 @@ def test_jsonl_ends_with_a_summary_and_csv_has_the_same_samples(p105):
     (["--to", "csv"], "--to csv needs --what paths or --what configurations"),
     (["--count", "0"], "must be at least 1"),
     (["--step", "0.1", "--count", "3"], "give at most one of --t, --step and --count"),
+    # options that would do nothing with the --what chosen
+    (["--what", "configurations", "--ypr"], "--ypr adds to the kinematic paths' frames"),
+    (["--what", "configurations", "--quaternion", "wxyz"], "--quaternion adds to the kinematic paths' frames"),
+    (["--what", "configurations", "--path", "p"], "--path names a kinematic path"),
+    (["--what", "paths", "--sequence", "s"], "--sequence names a configuration sequence"),
 ])
 def test_option_rules(p105, args, message):
     r = p105("interpolate", *args, FOUR_BAR)

@@ -761,3 +761,38 @@ def test_redundant_joints_by_relaxing_each_joint(seed):
                              else x for x in mech.pairs], mech.base)
         r = analyse(relaxed)
         assert (r.redundant_constraints < s.redundant_constraints) == (p.name in s.redundant_joints), p.name
+
+
+# --------------------------------------------------------------------------- generic low-order pairs
+
+def _with_generic_j2(flags):
+    """The planar four-bar with J2 as AP242's generic low-order pair with ``flags`` (t_x .. r_z),
+    its rotation the revolute's."""
+    mech = planar_four_bar()
+    j2 = mech.pair("J2")
+    params = dict(zip(("t_x", "t_y", "t_z", "r_x", "r_y", "r_z"), map(bool, flags)))
+    pairs = [Pair(p.name, "low_order", p.link1, p.link2, p.P1, p.P2, params=params) if p is j2 else p
+             for p in mech.pairs]
+    initial = {**mech.initial, "J2": (0.0, 0.0, 0.0, 0.0, 0.0, mech.initial["J2"][0])}
+    return Mechanism(mech.name, mech.links, pairs, mech.base, initial=initial)
+
+
+@pytest.mark.parametrize("flags, freedoms, mobility", [
+    # only r_z: the revolute pin it is; six values, one freedom
+    ((0, 0, 0, 0, 0, 1), 4, 1),
+    # t_x and r_z: a pin that also slides in the plane; planar Gruebler 3 (4 - 1) - 2 * 3 - 1 = 2
+    ((1, 0, 0, 0, 0, 1), 5, 2),
+])
+def test_a_generic_pairs_freedoms_are_its_flags(flags, freedoms, mobility):
+    """Locked values are no freedoms: Gruebler and the rank mobility count the flags, not the
+    six values (before: 6 freedoms, mobility 6 for the pin)."""
+    mech = _with_generic_j2(flags)
+    assert mech.pair("J2").value_count == 6 and mech.pair("J2").freedoms == sum(flags)
+    s = analyse(mech)
+    assert s.dof == freedoms and s.mobility == mobility
+    assert s.mobility_gruebler == 6 * (4 - 1 - 4) + freedoms
+    assert s.mobility == s.mobility_gruebler + s.redundant_constraints
+    if flags == (0, 0, 0, 0, 0, 1):  # exactly the revolute four-bar's structure
+        ref = analyse(planar_four_bar())
+        assert (s.rank, s.redundant_constraints, s.redundant_joints) == (ref.rank, ref.redundant_constraints,
+                                                                          ref.redundant_joints)

@@ -479,3 +479,87 @@ def test_motion_matches_scipy_construction(kind):
         for params in ([PARAMS.get(kind, {})] + ([{"layout": "ap242"}] if kind == "prismatic" else [])
                        + ([{"input_skew_angle": None}] if kind == "universal" else [])):
             close(t.motion(q, **params), _scipy_motion(kind, q, params), 1e-11)
+
+
+# ------------------------------------------------------------------ the generic low-order pair: its flags are the rule
+
+def _flag_params(bits) -> dict:
+    return dict(zip(pairs.FREEDOM_NAMES, (bool(b) for b in bits)))
+
+
+#: Every named pair AP242 derives flags for, but homokinetic: its flags are the universal
+#: pair's, and a generic pair with them is read as the universal pair (the supertype).
+NAMED_LOW = [k for k in pairs.LOW_ORDER_NAMED if k != "homokinetic"]
+
+
+@pytest.mark.parametrize("kind", NAMED_LOW)
+def test_a_generic_pair_with_a_named_pairs_flags_moves_exactly_as_that_pair(kind):
+    """The motion of low_order_kinematic_pair with the flags AP242 derives for ``kind`` is the
+    named pair's at the values its components give: checked against the closed forms built with
+    scipy's Rotation (the universal pair: Rz(rz) Rx(rx), not the generic Rx Ry Rz order)."""
+    flags, comps = pairs.LOW_ORDER_NAMED[kind]
+    assert pairs.named_low_order(flags) == kind
+    t = PAIR_KINDS["low_order"]
+    fp = _flag_params(flags)
+    assert t.freedoms(fp) == sum(flags) == PAIR_KINDS[kind].freedoms()
+    assert len(comps) == PAIR_KINDS[kind].value_count
+    assert t.locked(fp) == tuple(not f for f in flags)
+    named = {"layout": "ap242"} if kind == "prismatic" else {}
+    rng = np.random.default_rng(sum(map(ord, kind)))
+    q6 = rng.uniform(-2.5, 2.5, (6, 6)) * np.array(flags, float)
+    qk = q6[:, list(comps)]
+    truth_kind = "spherical" if kind == "spherical_with_pin" else kind  # its roll is 0 here
+    truth = np.array([_scipy_motion(truth_kind, q, named) for q in qk])
+    close(t.motion(q6, **fp), truth, 1e-12)
+    # the same transform as the named pair's own, exactly (one motion, not two)
+    assert np.array_equal(t.motion(q6, **fp), PAIR_KINDS[kind].motion(qk, **named))
+    J = t.motion_jacobian(q6, **fp)
+    close(J[..., list(comps)], PAIR_KINDS[kind].motion_jacobian(qk, **named), 0)
+    unused = [i for i in range(6) if i not in comps]
+    close(J[..., unused], np.zeros(J[..., unused].shape), 0)
+
+
+def test_homokinetic_flags_name_the_universal_pair():
+    assert pairs.LOW_ORDER_NAMED["homokinetic"][0] == pairs.LOW_ORDER_NAMED["universal"][0]
+    assert pairs.named_low_order(pairs.LOW_ORDER_NAMED["homokinetic"][0]) == "universal"
+
+
+def test_the_universal_flags_are_not_the_generic_composition():
+    """Why the named pair's motion must win: for r_x, r_z the generic T Rx Ry Rz would be
+    Rx(rx) Rz(rz), which is not the universal pair's Rz(q1) Rx(q2)."""
+    t = PAIR_KINDS["low_order"]
+    q = [0.0, 0.0, 0.0, 0.6, 0.0, 0.9]
+    M = t.motion(q, **_flag_params((0, 0, 0, 1, 0, 1)))
+    close(M, compose(rot_z(0.9), rot_x(0.6)))
+    assert np.abs(M - compose(rot_x(0.6), rot_z(0.9))).max() > 0.1
+
+
+UNNAMED_FLAGS = [bits for bits in ((n >> 5 & 1, n >> 4 & 1, n >> 3 & 1, n >> 2 & 1, n >> 1 & 1, n & 1)
+                                   for n in range(64)) if pairs.named_low_order(bits) is None]
+
+
+def test_unnamed_flag_sets_move_translation_first_then_x_y_z_rotations():
+    """Flags no named pair has (54 of the 64): ``T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz)`` (scipy's
+    intrinsic "XYZ" Euler angles), locked columns zero, free columns the finite differences."""
+    from scipy.spatial.transform import Rotation
+
+    assert len(UNNAMED_FLAGS) == 64 - (len(pairs.LOW_ORDER_NAMED) - 1)
+    t = PAIR_KINDS["low_order"]
+    rng = np.random.default_rng(7)
+    for bits in UNNAMED_FLAGS:
+        fp = _flag_params(bits)
+        q = rng.uniform(-2, 2, 6) * np.array(bits, float)
+        T = np.eye(4)
+        T[:3, :3] = Rotation.from_euler("XYZ", q[3:]).as_matrix()
+        T[:3, 3] = q[:3]
+        close(t.motion(q, **fp), T, 1e-12)
+        assert t.freedoms(fp) == sum(bits)
+        J = t.motion_jacobian(q, **fp)
+        M0inv, h = inverse(t.motion(q, **fp)), 1e-6
+        for i, b in enumerate(bits):
+            if not b:  # a locked value is not perturbed: its column is zero
+                close(J[:, i], np.zeros(6), 0)
+                continue
+            e = np.eye(6)[i] * h
+            dM = (t.motion(q + e, **fp) - t.motion(q - e, **fp)) / (2 * h)
+            close(J[:, i], vee(M0inv @ dM), 1e-7)

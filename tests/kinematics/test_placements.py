@@ -383,6 +383,42 @@ def test_ypr_from_matrix_round_trip(y, p, r):
         assert abs(p2 - p) < 1e-12 and ang_diff(y2, y) < 1e-9 and ang_diff(r2, r) < 1e-9
 
 
+HALF_PI = 0.5 * math.pi
+YPR_REL_TOL = 1e-6   # the validator's band around +-pi/2 (part105.catalogue.YPR_REL_TOL)
+
+
+@pytest.mark.parametrize("pitch", [HALF_PI, -HALF_PI, HALF_PI - 1e-9, HALF_PI + 1e-7, -HALF_PI + 1e-7],
+                         ids=["+pi/2", "-pi/2", "pi/2-1e-9", "pi/2+1e-7", "-pi/2+1e-7"])
+@pytest.mark.parametrize("yaw, roll", [(0.3, 0.2), (-2.9, 3.0), (3.1, -0.4)])
+def test_canonical_ypr_at_the_gimbal_lock(pitch, yaw, roll):
+    # D15: at a rectangular pitch 5.3.7 wants roll 0; the yaw carries the rotation about the locked axis
+    y, p, r = P.canonical_ypr(yaw, pitch, roll, YPR_REL_TOL)
+    assert r == 0.0 and abs(p) == HALF_PI and -math.pi < y <= math.pi
+    want = Rotation.from_euler("zyx", [yaw, pitch, roll]).as_matrix()   # scipy: Rx(roll) Ry(pitch) Rz(yaw)
+    got = Rotation.from_euler("zyx", [y, p, r]).as_matrix()
+    assert np.allclose(P.ypr_rotation(y, p, r), got, atol=1e-15, rtol=0)
+    # exactly at the lock the same rotation; near it (within the validator's band) the nearest
+    # rotation with roll 0: moved by no more than the pitch's distance from +-pi/2 (times 2)
+    moved = abs(abs(pitch) - HALF_PI)
+    assert np.abs(got - want).max() <= (1e-12 if moved == 0.0 else 2.0 * moved + 1e-12)
+    if moved == 0.0:
+        sign = 1.0 if pitch > 0 else -1.0
+        assert math.remainder(y - (yaw + sign * roll), 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("ypr", [(0.3, 0.5, 0.2), (math.pi, -1.2, -0.7), (0.1, HALF_PI - 1e-3, 2.0),
+                                 (0.4, HALF_PI - 1e-9, 0.0)])
+def test_canonical_ypr_leaves_a_canonical_triple_alone(ypr):
+    assert P.canonical_ypr(*ypr, YPR_REL_TOL) == ypr
+
+
+@pytest.mark.parametrize("ypr", [(4.0, 0.5, 0.2), (0.3, 2.0, -0.1), (-math.pi, 0.2, 7.0)])
+def test_canonical_ypr_brings_angles_into_their_intervals(ypr):
+    y, p, r = P.canonical_ypr(*ypr, YPR_REL_TOL)
+    assert -math.pi < y <= math.pi and -HALF_PI <= p <= HALF_PI and -math.pi < r <= math.pi
+    assert rot_err(P.ypr_rotation(y, p, r), P.ypr_rotation(*ypr)) < 1e-14
+
+
 def test_ypr_rotation_in_frames_of_5_3_6():
     """5.3.6: yaw about z, then pitch and roll; check the intermediate axes the matrix uses."""
     y, p, r = 0.4, -0.3, 1.1

@@ -9,8 +9,7 @@ is converted to every profile through the CLI (in process) and the output valida
   feature); nothing is written.
 
 Independent truth: the validator (the schema's long form and its rules), which knows nothing
-of the converter. Cases slower than a few seconds are ``slow``; cases that fail only because
-low-order pair values are not read yet (another branch of issue 11) are listed as known.
+of the converter. Cases slower than a few seconds are ``slow``.
 """
 
 from __future__ import annotations
@@ -31,17 +30,6 @@ PROFILES = ("ap214", "ap242", "p105")
 
 #: Conversions whose source or output takes more than a few seconds to read or validate.
 SLOW = {"b3d_four_bar_heavy10"}
-
-#: Files that hold ``low_order_kinematic_pair_value`` (build123d writes it for every pair) or
-#: only ``low_order_kinematic_pair`` pairs: reading and writing those is the 'loworder' branch's
-#: part of issue 11. Until that is merged, the export refuses them (exit 2 naming the value;
-#: exit 1: no pair can be written); the test says so (strict: it fails once they convert, so
-#: that the list is emptied).
-LOW_ORDER = {"b3d_cylindrical", "b3d_four_bar_heavy10", "b3d_planar", "b3d_pr_fixture_cylindrical_unsolved",
-             "b3d_pr_fixture_offset_hinge_unsolved", "b3d_prismatic", "b3d_revolute", "b3d_spherical",
-             "b3d_revolute_occtwritten", "b3d_spherical_occtwritten", "four_bar_low_order_value",
-             "b3d_spherical_as_low_order"}
-
 
 def _holds_mechanism(path: Path) -> bool:
     text = path.read_bytes()
@@ -72,19 +60,11 @@ def _cases() -> list:
             marks = []
             if path.stem in SLOW:
                 marks.append(pytest.mark.slow)
-            if path.stem in LOW_ORDER:
-                marks.append(pytest.mark.xfail(strict=True, raises=_NotConverted,
-                                               reason="low-order pairs and values are read and "
-                                                      "written by the 'loworder' branch of issue 11"))
             out.append(pytest.param(path, profile, id=f"{_label(path)}-{profile}", marks=marks))
     if not EXTERNAL.is_dir():
         out.append(pytest.param(None, None, id="external", marks=pytest.mark.skip(
             reason=f"{EXTERNAL} is absent (the shared external files sit beside the checkout)")))
     return out
-
-
-class _NotConverted(Exception):
-    """A source the export refused for a reason the test knows (see LOW_ORDER)."""
 
 
 @pytest.mark.parametrize("path, profile", _cases())
@@ -97,8 +77,6 @@ def test_export_schema_writes_what_validate_passes_or_says_why_not(path, profile
         assert not out.exists(), "a failed export left its output"
         errors = [line for line in err.splitlines() if line.startswith("p105: error: ")]
         assert errors and str(path) in errors[0], err  # a stated reason, naming the file
-        if "low_order_kinematic_pair_value" in errors[0] or "(low_order)" in errors[0]:
-            raise _NotConverted(errors[0])
         return
     doc = read_step(out.read_text(), str(out))
     started = time.perf_counter()

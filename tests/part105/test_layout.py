@@ -97,3 +97,16 @@ def test_validate_warns_about_links_sharing_a_name(tmp_path, capsys):
 def test_the_rule_is_listed(capsys):
     code, out, _ = _run(["validate", "--list-rules"], capsys)
     assert code == 0 and re.search(r"^KIN-LINK-NAME\b", out, re.M)
+
+
+@pytest.mark.parametrize("path", [FOUR_BAR, ROOT / "tests" / "data" / "corpus" / "four_bar_ap214.stp"],
+                         ids=["ap242", "ap214"])
+def test_pair_frames_are_the_frames_of_the_pairs_on_each_link(path):
+    # built once for all links (a 10,000-pair chain asked each link for them: n^2); the frames a
+    # link's pairs are placed at, and link_frames gives the link's other placements
+    mf = ModelFile.of(read_step(path.read_text(), str(path)))
+    (ml,) = layout.mechanisms(mf)
+    for link in ml.links:
+        want = {p.frame_1 for p in ml.pairs if p.link1 == link} | {p.frame_2 for p in ml.pairs if p.link2 == link}
+        assert ml.pair_frames(link) == want and want
+        assert not set(layout.link_frames(mf, ml, link).values()) & want

@@ -7,10 +7,11 @@ occurrence where the mate puts it: the solved links must land there), what the m
 clauses (which way a prismatic pair slides), and the validator (which still reports every
 deviation of the source and passes the repaired output).
 
-build123d writes every pair value as ``low_order_kinematic_pair_value``, which another branch
-of issue 11 reads; these tests read the files with the values removed (a tree's mobility does
-not depend on its configuration) or rewritten as the conforming revolute_pair_value they equal
-(rotation about z only), so that they test the layout and not the value reader.
+build123d writes every pair value as ``low_order_kinematic_pair_value`` (read by
+part105.pair_values, projected onto the pair's freedoms). The layout tests read the files with
+the values removed (a tree's mobility does not depend on its configuration) or rewritten as the
+conforming revolute_pair_value they equal (rotation about z only), so that they test the layout
+and not the value reader; the files as they are are solved at their own states last.
 """
 
 from __future__ import annotations
@@ -213,3 +214,15 @@ def test_a_shape_context_in_other_units_is_not_repaired(tmp_path):
     assert proc.returncode == 1, err
     assert f"p105: error: {src}: #740: link 'base': its representation's context #716 and the context #367" in err
     assert "other units" in err and not out.exists()
+
+
+@pytest.mark.parametrize("name", ["b3d_revolute", "b3d_cylindrical", "b3d_planar", "b3d_fastened",
+                                  pytest.param("b3d_four_bar_heavy10", marks=pytest.mark.slow)])
+def test_each_file_as_it_is_solves_to_its_cad_assembly_at_its_state(name):
+    """The files as build123d wrote them, low-order values and all: at the file's state the
+    links land where its CAD assembly places them. (Not the prismatic mate, whose state moves
+    along z where AP242's slider cannot; nor the spherical one, whose three rotations build123d
+    composes as Rz Ry Rx, not as the yaw, pitch, roll of a spherical pair value.)"""
+    path = B3D / f"{name}.stp"
+    _doc, mf, mech = _model(path.read_text(), str(path))
+    _check_poses(mf, mech)

@@ -25,6 +25,8 @@ WRITTEN = [k for k in SUPPORTED_KINDS if k != "fully_constrained"]  # no value e
 @pytest.mark.parametrize("kind", WRITTEN)
 def test_the_arguments_follow_the_schema_order_of_the_value_entity(profile, kind):
     layout = PROFILES[profile]["layout"]
+    if kind == "low_order" and layout == "1996":
+        pytest.skip("the generic low-order pair is AP242's only (the 1996 writers refuse it)")
     slots = Population([], profile).layout_for(value_entity(kind)).slots
     assert slots, f"{value_entity(kind)} is not an entity of {profile}"
     own = [s for s in slots if s.entity not in ("representation_item", "pair_value")]

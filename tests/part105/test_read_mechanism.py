@@ -767,30 +767,66 @@ def test_spherical_screw_universal_cylindrical_pairs_from_closed_forms():
     assert _close(T[:3, 3], [0.0, 0.0, 0.020 + 0.00125])
 
 
-def test_ap242_generic_low_order_pair_reads_its_flags_and_six_values():
-    """The four-bar's pin B rewritten as AP242's generic low_order_kinematic_pair with only r_z
-    free: the flags and six values are read, and the loop still closes."""
+def _generic_pin_b(flags, values, limits=None):
+    """The AP242 four-bar with pin B rewritten as AP242's generic low_order_kinematic_pair with
+    ``flags`` (t_x .. r_z) and its values as low_order_kinematic_pair_value ``values(angle)``;
+    ``limits``: the twelve limits of low_order_kinematic_pair_with_range (file units)."""
     _, recs = _records("four_bar", "ap242")
     pid = next(r["id"] for r in recs if r.get("type") == "revolute_pair" and r["args"][0] == "B")
-    F, T = {"enum": "F"}, {"enum": "T"}
 
     def edit(data):
         for r in data:
             if r["id"] == pid:
-                r["type"] = "low_order_kinematic_pair"
-                r["args"] = r["args"][:6] + [F, F, F, F, F, T]
+                r["type"] = "low_order_kinematic_pair" + ("_with_range" if limits else "")
+                r["args"] = r["args"][:6] + [{"enum": "T" if f else "F"} for f in flags] + list(limits or ())
             elif r.get("type") == "revolute_pair_value" and r["args"][1]["ref"] == pid:
                 r["type"] = "low_order_kinematic_pair_value"
-                r["args"] = r["args"][:2] + [0.0, 0.0, 0.0, 0.0, 0.0, r["args"][2]]
+                r["args"] = r["args"][:2] + list(values(r["args"][2]))
 
-    m = read_mechanism(_doc("four_bar", "ap242", edit))
+    return _doc("four_bar", "ap242", edit), pid
+
+
+def test_ap242_generic_low_order_pair_with_revolute_flags_is_the_revolute_pair():
+    """Pin B as the generic pair with only r_z free: read as the revolute pair its flags name
+    (one freedom, the rotation from actual_rotation_z), moving exactly as the revolute pin."""
+    doc, _pid = _generic_pin_b((0, 0, 0, 0, 0, 1), lambda a: (0.0, 0.0, 0.0, 0.0, 0.0, a))
+    m = read_mechanism(doc)
     ref = _model("four_bar", "ap242")
     b = m.pair("B")
-    assert b.kind == "low_order"
-    assert {f: b.params[f] for f in ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")} == {
-        "t_x": False, "t_y": False, "t_z": False, "r_x": False, "r_y": False, "r_z": True}
-    assert m.initial["B"] == (0.0, 0.0, 0.0, 0.0, 0.0, ref.initial["B"][0])
+    assert (b.kind, b.freedoms, dict(b.params)) == ("revolute", 1, {})
+    assert m.initial["B"] == pytest.approx(ref.initial["B"], rel=1e-15)
     assert _close(b.transform(m.initial["B"]), ref.pair("B").transform(ref.initial["B"]), 1e-15)
+
+
+def test_a_generic_revolute_pairs_limits_are_its_rotation_z_limits():
+    """low_order_kinematic_pair_with_range lists rotation limits (x, y, z), then translation
+    limits: read as a revolute pair, pin B is bounded by lower/upper_limit_actual_rotation_z
+    (degrees in the four-bar's file); the other, locked, limits bound nothing."""
+    limits = [-1.0, 1.0, None, None, -120.0, 150.0, -5.0, 5.0, None, None, None, None]
+    doc, _pid = _generic_pin_b((0, 0, 0, 0, 0, 1), lambda a: (0.0, 0.0, 0.0, 0.0, 0.0, a), limits)
+    b = read_mechanism(doc).pair("B")
+    assert b.kind == "revolute"
+    assert (b.lower, b.upper) == (pytest.approx((-120.0 * math.pi / 180,), rel=1e-12),
+                                  pytest.approx((150.0 * math.pi / 180,), rel=1e-12))
+
+
+def test_ap242_generic_low_order_pair_with_no_named_flags_keeps_its_six_values():
+    """Flags no named pair has (t_x and r_z): the generic pair, six values, two freedoms; its
+    motion is T(tx) Rz(rz) (scipy's rotation as the independent truth)."""
+    from scipy.spatial.transform import Rotation
+
+    doc, _pid = _generic_pin_b((1, 0, 0, 0, 0, 1), lambda a: (2.5, 0.0, 0.0, 0.0, 0.0, a))
+    m = read_mechanism(doc)
+    ref = _model("four_bar", "ap242")
+    b = m.pair("B")
+    assert (b.kind, b.freedoms) == ("low_order", 2)
+    assert {f: b.params[f] for f in ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")} == {
+        "t_x": True, "t_y": False, "t_z": False, "r_x": False, "r_y": False, "r_z": True}
+    angle = ref.initial["B"][0]
+    assert m.initial["B"] == pytest.approx((0.0025, 0.0, 0.0, 0.0, 0.0, angle), rel=1e-15)
+    M = b.motion(m.initial["B"])
+    assert _close(M[:3, :3], Rotation.from_euler("z", angle).as_matrix(), 1e-15)
+    assert _close(M[:3, 3], [0.0025, 0.0, 0.0], 1e-15)
 
 
 @pytest.mark.parametrize("profile", ("ap214", "ap242"))

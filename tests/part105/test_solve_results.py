@@ -41,7 +41,9 @@ def _solve(cli, tmp_path, *args):
     out = tmp_path / "out.stp"
     r = cli("solve", *args, "-o", out)
     assert r.returncode == 0, r.stderr.decode()
-    j = cli("solve", *args, "--to", "jsonl", "--no-timings")
+    # --resulting-path is model output: with --to jsonl it would do nothing (a usage error)
+    table_args = [a for k, a in enumerate(args) if a != "--resulting-path" and (k == 0 or args[k - 1] != "--resulting-path")]
+    j = cli("solve", *table_args, "--to", "jsonl", "--no-timings")
     assert j.returncode == 0, j.stderr.decode()
     recs = [json.loads(x) for x in j.stdout.decode().splitlines()]
     text = out.read_text()
@@ -186,10 +188,10 @@ def test_resulting_path_errors(cli, args, words):
     assert words in r.stderr.decode() and r.stdout == b""
 
 
-def test_tables_note_that_the_path_is_model_output(cli):
+def test_tables_refuse_the_path_that_is_model_output(cli):
+    # an option that would do nothing is a usage error (issue 11): the tables have the placements
     r = cli("solve", FOUR_BAR_242, *SWEEP, "--resulting-path", "coupler", "--to", "csv")
-    assert r.returncode == 0 and "--to model only" in r.stderr.decode()
-    assert r.stdout.decode().splitlines()[0].startswith("index,t,status")
+    assert r.returncode == 2 and "--to model only" in r.stderr.decode() and r.stdout == b""
 
 
 def test_one_configuration_writes_no_path_and_says_so(cli, tmp_path):

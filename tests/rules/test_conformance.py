@@ -102,7 +102,7 @@ DIMS = "#23=DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);"
 # (schema, rule, severity, instance, attribute, bad edits, good edits)
 CASES = [
     # ---------------------------------------------------------------- AP242
-    ("ap242", "SCH-UNKNOWN-ENTITY", "warning", 21, None,
+    ("ap242", "SCH-UNKNOWN-ENTITY", "error", 21, None,
      {21: "#21=SU_PARAMETRES('su',0.,0.,0.,0.,0.,0.);"}, {}),
     ("ap242", "SCH-ABSTRACT", "error", 22, None,
      {22: "#22=KINEMATIC_PAIR('j2',*,$,#8,#9,#12);"},
@@ -111,18 +111,10 @@ CASES = [
      {19: "#19=REVOLUTE_PAIR_VALUE('v',#15);"}, {}),
     ("ap242", "SCH-ARITY", "error", 15, None,  # the Part 105:1996 layout in an AP242 file
      {15: "#15=REVOLUTE_PAIR('j1',$,#8,#9,#12);"}, {}),
-    ("ap242", "SCH-DERIVED", "error", 15, "r_z",  # OCCT writes .T. where the standard derives
-     {15: "#15=REVOLUTE_PAIR('j1',*,$,#8,#9,#12,*,*,*,*,*,.T.);"}, {}),
-    ("ap242", "SCH-DERIVED", "error", 15, "name",
-     {15: "#15=REVOLUTE_PAIR('j1','j1',$,#8,#9,#12,*,*,*,*,*,*);"}, {}),
-    ("ap242", "SCH-DERIVED", "error", 20, "context_of_items",
-     {20: "#20=MECHANISM_STATE_REPRESENTATION('state',(#19),#4,#18);"}, {}),
     ("ap242", "SCH-DERIVED", "error", 19, "actual_rotation",  # '*' on an explicit attribute
      {19: "#19=REVOLUTE_PAIR_VALUE('v',#15,*);"}, {}),
     ("ap242", "SCH-DERIVED", "error", 15, "r_x",  # '$' on a derived slot
      {15: "#15=REVOLUTE_PAIR('j1',*,$,#8,#9,#12,*,*,*,$,*,*);"}, {}),
-    ("ap242", "SCH-DERIVED", "error", 1, "named_unit.dimensions",  # derived by the si_unit part
-     {1: "#1=(LENGTH_UNIT()NAMED_UNIT(#23)SI_UNIT(.MILLI.,.METRE.));", 23: DIMS}, {23: DIMS}),
     ("ap242", "SCH-OPTIONAL", "error", 19, "actual_rotation",
      {19: "#19=REVOLUTE_PAIR_VALUE('v',#15,$);"}, {}),
     ("ap242", "SCH-OPTIONAL", "error", 15, "transform_item_2",
@@ -178,7 +170,7 @@ CASES = [
      {22: "#22=(LENGTH_UNIT()NAMED_UNIT(#23));", 23: DIMS},
      {22: "#22=LENGTH_UNIT(#23);", 23: DIMS}),
     # ---------------------------------------------------------------- AP214
-    ("ap214", "SCH-UNKNOWN-ENTITY", "warning", 20, None,  # an AP242 name
+    ("ap214", "SCH-UNKNOWN-ENTITY", "error", 20, None,  # an AP242 name
      {20: "#20=KINEMATIC_TOPOLOGY_STRUCTURE('topo',(#12),#4);"}, {}),
     ("ap214", "SCH-ABSTRACT", "error", 20, None,
      {20: "#20=GENERIC_LITERAL();"}, {20: "#20=BOOLEAN_LITERAL(.T.);"}),
@@ -188,8 +180,6 @@ CASES = [
      {19: "#19=REVOLUTE_PAIR_VALUE('v',#14,0.5);"}, {19: "#19=REVOLUTE_PAIR_VALUE(#14,0.5);"}),
     ("ap214", "SCH-DERIVED", "error", 14, "description",
      {14: "#14=REVOLUTE_PAIR('j1',*,#8,#9,#12);"}, {}),
-    ("ap214", "SCH-DERIVED", "error", 1, "named_unit.dimensions",
-     {1: "#1=(LENGTH_UNIT()NAMED_UNIT(#23)SI_UNIT(.MILLI.,.METRE.));", 23: DIMS}, {23: DIMS}),
     ("ap214", "SCH-OPTIONAL", "error", 14, "name",
      {14: "#14=REVOLUTE_PAIR($,$,#8,#9,#12);"}, {}),
     ("ap214", "SCH-TYPE", "error", 15, "lower_limit_actual_rotation",  # not in the SELECT
@@ -250,7 +240,7 @@ def test_messages_are_specific(schemas):
     (f,) = findings_of(p21(edit(BASE_242, {5: "#5=CARTESIAN_POINT('',(0.,0.,0.,0.));"})), s)
     assert "4 elements" in f.message and "[1:3]" in f.message
     (f,) = findings_of(p21(edit(BASE_242, {17: "#17=KINEMATIC_TOPOLOGY_STRUCTURE('t',(#12,#10),#4);"})), s)
-    assert f.rule == "SCH-TYPE" and f.message.startswith("items: [1]: ")
+    assert f.rule == "SCH-TYPE" and f.attribute == "items" and f.message.startswith("[1]: ")
     (f,) = findings_of(p21(edit(BASE_242, {15: "#15=REVOLUTE_PAIR('j1',*,$,#8,#9,#12);"})), s)
     assert "12 parameters" in f.message and "*t_x" in f.message and "found 6" in f.message
     (f,) = findings_of(p21(edit(BASE_242, {1: "#1=(NAMED_UNIT(*)LENGTH_UNIT()SI_UNIT(.MILLI.,.METRE.));"})), s)
@@ -421,12 +411,21 @@ def test_probe_standard_star_is_clean(schemas):
 
 
 @needs_authored
-def test_probe_occt_style_writes_values_where_the_standard_derives(schemas):
-    got = _file_findings(AUTHORED / "probe_occt_style.stp", schemas["ap242"])
-    assert {f.rule for f in got} == {"SCH-DERIVED"}
-    assert [(f.entity, f.attribute) for f in got] == [
-        (15, "name"), (15, "t_x"), (15, "t_y"), (15, "t_z"), (15, "r_x"), (15, "r_y"),
-        (15, "r_z"), (20, "context_of_items")]
+def test_probe_occt_style_values_where_the_standard_derives_are_left_to_derived(schemas):
+    # explicit values in derived slots are compared with the derivation by rules/derived.py
+    # (tests/rules/test_derived.py); the instance-level check neither passes nor fails them
+    assert _file_findings(AUTHORED / "probe_occt_style.stp", schemas["ap242"]) == []
+
+
+@pytest.mark.parametrize("name,iid,line", [
+    ("ap242", 15, "#15=REVOLUTE_PAIR('j1',*,$,#8,#9,#12,*,*,*,*,*,.T.);"),
+    ("ap242", 15, "#15=REVOLUTE_PAIR('j1','j1',$,#8,#9,#12,*,*,*,*,*,*);"),
+    ("ap242", 20, "#20=MECHANISM_STATE_REPRESENTATION('state',(#19),#4,#18);"),
+    ("ap214", 1, "#1=(LENGTH_UNIT()NAMED_UNIT(#23)SI_UNIT(.MILLI.,.METRE.));"),
+])
+def test_explicit_values_in_derived_slots_are_not_conformance_findings(schemas, name, iid, line):
+    base = BASE_242 if name == "ap242" else BASE_214
+    assert findings_of(p21(edit(base, {iid: line, 23: DIMS})), schemas[name]) == []
 
 
 @needs_authored
@@ -452,7 +451,9 @@ def test_probe_p105_1996_against_ap242_is_full_of_findings(schemas):
 
 BIG_FILES = sorted(BIG.glob("*.step")) if BIG.is_dir() else []
 # These AUTOMOTIVE_DESIGN_CC2 files use two entities the AP214 long form
-# (edition 3) no longer has: genuine, reported as warnings.
+# (edition 3) no longer has: unknown to the schema p105 checks with, and
+# reported (validate makes them warnings: the declared schema, a draft p105
+# has no long form of, may know them; tests/rules/test_validate.py).
 EXPECTED_UNKNOWN = {"mechanical_context", "product_type"}
 
 
@@ -461,7 +462,6 @@ def test_big_real_files(schemas, path):
     schema = schemas["ap214"]
     sf = read_step(decode_bytes(path.read_bytes()), str(path))
     got = list(check_population(sf.records(), schema, step_types_of(sf, schema)))
-    assert [f for f in got if f.severity == "error"] == []
     assert {(f.rule, f.entity_type) for f in got} <= {("SCH-UNKNOWN-ENTITY", n)
                                                        for n in EXPECTED_UNKNOWN}
 

@@ -212,6 +212,30 @@ def test_latin1_files_are_read():
     assert records(decode_bytes(raw))[0]["args"] == ["caf\u00e9"]
 
 
+def test_raw_8bit_bytes_are_read_byte_for_byte_and_reported_once_with_the_first_place():
+    # GBK from a SolidWorks export: bytes that are not UTF-8
+    gbk = "\u4e2a\u4eba".encode("gbk")
+    raw = p21("#1=A('x');\n#2=A('" + "\u00e9".encode("latin-1").decode("latin-1") + "');").encode("latin-1")
+    raw = raw.replace(b"'x'", b"'" + gbk + b"'")
+    sf = read_step(decode_bytes(raw), "t.stp")
+    assert sf.record(1)["args"] == [gbk.decode("latin-1")]  # kept, byte for byte
+    assert sf.not_utf8.count == len(gbk) + 1
+    (message, offset), = sf.warnings
+    line, col = sf.line_col(offset)
+    assert (line, col) == (8, 7)  # the first raw byte, inside #1's string
+    assert message.startswith(f"not UTF-8: {len(gbk) + 1} raw 8-bit bytes (the first here)")
+    details = list(sf.not_utf8.details(sf.text))
+    assert [sf.line_col(o) for _, o in details] == [(8, 7), (9, 7)]
+    assert "as GBK: '\u4e2a\u4eba'" in details[0][0] and "E9" in details[1][0]
+
+
+def test_utf8_files_give_no_encoding_warning():
+    raw = p21("#1=A('\u00e9\u4e2a');").encode("utf-8")
+    sf = read_step(decode_bytes(raw), "t.stp")
+    assert sf.not_utf8 is None and sf.warnings == []
+    assert sf.record(1)["args"] == ["\u00e9\u4e2a"]
+
+
 def test_writer_is_canonical_and_deterministic():
     text = p21("#3 = A ( 1.000000000000000E-01 , 'x''y' , ( #1 , $ ) , * ) ;\n#1=B(+007,-0.);")
     first = io.StringIO()

@@ -16,6 +16,10 @@ from .problem import (
 )
 from .quaternions import _qconj, _qmat, _qmul, _slerp_mid
 
+#: A held cable whose slack (L - |R|) / L is below this and whose solve fails is reported as
+#: nearly taut: the tension ~ (L - |R|)^-1/2 is then what the Newton iteration cannot resolve.
+NEAR_TAUT = 1e-6
+
 
 def state_from_frames(problem: RodProblem, frames, forces=None, grading=0.0):
     """A warm-start state from node frames ``(n+1, 4, 4)`` (e.g. another model's answer or a guess).
@@ -145,10 +149,13 @@ def solve_rod(problem: RodProblem, *, segments: int = 50, tol: float = 1e-10, wa
     if n < 2:
         raise ValueError("rod: segments must be >= 2")
     L = float(problem.length)
+    dist = None
     if problem.start != "free" and problem.end != "free":
         dist = float(np.linalg.norm(np.asarray(problem.T_end, float)[:3, 3]
                                     - np.asarray(problem.T_start, float)[:3, 3]))
-        if dist >= L * (1.0 - 1e-9):
+        # over-length is |R| >= L exactly (docs/cable.md): a cable with any slack has an equilibrium;
+        # one the solver cannot reach is not_converged, with the slack as the reason
+        if dist >= L:
             return _overlength_solution(problem, n, f"end points {dist:.9g} m apart, cable {L:.9g} m")
     rev = problem.start == "free"
     p = _reversed(problem) if rev else problem
@@ -220,6 +227,9 @@ def solve_rod(problem: RodProblem, *, segments: int = 50, tol: float = 1e-10, wa
             sol.message = fam_msg
     if not sol.converged and sol.status == "not_converged":
         _sanitize(sol)
+        if dist is not None and L - dist < NEAR_TAUT * L:
+            sol.message = (f"nearly taut: the end points are {L - dist:.3g} m closer than the cable's length "
+                           f"{L:.6g} m (slack {(L - dist) / L:.3g}); the tension grows like (L - |R|)^-1/2")
     return _unreverse(sol, L) if rev else sol
 
 

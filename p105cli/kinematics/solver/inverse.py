@@ -158,11 +158,13 @@ def solve_path(mech, link: str, poses, *, frame=None, initial=None, tol: float =
     Tf = np.eye(4) if frame is None else np.asarray(frame, dtype=np.float64)
     cols, u = [], []
     off = 0
+    locked = pl.locked_values()
     for k, _, _, _ in chain:
         sl = pl.slices[k]
         for j in range(sl.stop - sl.start):
-            cols.append(off + j)
-            u.append(sl.start + j)
+            if not locked[sl.start + j]:  # a value the pair's flags lock is no unknown
+                cols.append(off + j)
+                u.append(sl.start + j)
         off += sl.stop - sl.start
     u = np.array(u, dtype=int)
     cols = np.array(cols, dtype=int)

@@ -66,9 +66,19 @@ class Plan:
     def nv(self) -> int:
         return int(self.angle_mask.size)
 
+    def locked_values(self) -> np.ndarray:
+        """(nv,) True where a pair's flags lock the value (``PairType.locked``): no unknown of
+        the solvers, so it stays exactly as given."""
+        out = np.zeros(self.nv, dtype=bool)
+        for k, sl in enumerate(self.slices):
+            out[sl] = self.types[k].locked(self.params[k])
+        return out
+
     def loop_values(self) -> np.ndarray:
-        """Flat indices of the values of every pair that lies on a loop."""
-        idx = sorted({i for lp in self.loops for k, _ in lp for i in range(*self.slices[k].indices(self.nv))})
+        """Flat indices of the free values of every pair that lies on a loop."""
+        locked = self.locked_values()
+        idx = sorted({i for lp in self.loops for k, _ in lp for i in range(*self.slices[k].indices(self.nv))
+                      if not locked[i]})
         return np.array(idx, dtype=int)
 
 
@@ -82,7 +92,8 @@ def plan(mech) -> Plan:
     from ..graph import topology
 
     order, tree, roots, _, _, loops = topology(mech)
-    missing = [n for n in mech.link_names if n not in order]
+    reached = set(order)
+    missing = [n for n in mech.link_names if n not in reached]
     if missing:
         raise SolveError(f"mechanism {mech.name!r}: links {missing} are not connected to the base "
                          f"link {mech.base!r}")
