@@ -183,37 +183,28 @@ def test_export_schema_repairs_the_contexts_and_keeps_the_motion(profile, tmp_pa
         _check_poses(mf, mech)
 
 
-def test_what_cannot_be_repaired_is_exit_1_and_no_output(tmp_path):
-    """Both shapes in one context: a link representation must share its shape's context and
-    the two link representations must not share one; nothing satisfies both."""
+@pytest.mark.parametrize("line, new, said", [
+    # both shapes in one context: a link representation must share its shape's context and the
+    # two link representations must not share one; nothing satisfies both
+    ("#36 = ADVANCED_BREP_SHAPE_REPRESENTATION('',(#11,#37),#367);", ("#367)", "#716)"),
+     "#741: the shapes of links 'base' and 'moving' are in one context #716"),
+    # the base link's shape in metres, its link representation in millimetres: writing the link
+    # in its shape's context would change what its frames mean
+    ("#368 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );", (".MILLI.", "$"),
+     "#740: link 'base': its representation's context #716 and the context #367 of its shape #36 have "
+     "other units"),
+], ids=["shapes-share-a-context", "shape-in-other-units"])
+def test_what_cannot_be_repaired_is_exit_1_and_no_output(line, new, said, tmp_path):
     text = _revolute_values("b3d_revolute")
-    line = "#36 = ADVANCED_BREP_SHAPE_REPRESENTATION('',(#11,#37),#367);"
     assert line in text
-    src = tmp_path / "shared_shape_context.stp"
-    src.write_text(text.replace(line, line.replace("#367)", "#716)")))
+    src = tmp_path / "source.stp"
+    src.write_text(text.replace(line, line.replace(*new)))
     out = tmp_path / "out.stp"
     proc = cli_in_process("export", "--schema", "ap242", str(src), "-o", str(out))
     err = proc.stderr.decode()
     assert proc.returncode == 1, err
-    assert f"p105: error: {src}: #741: the shapes of links 'base' and 'moving' are in one context #716" in err
-    assert "not repaired" in err
+    assert f"p105: error: {src}: {said}" in err
     assert not out.exists()
-
-
-def test_a_shape_context_in_other_units_is_not_repaired(tmp_path):
-    """The base link's shape in metres, its link representation in millimetres: writing the
-    link in its shape's context would change what its frames mean."""
-    text = _revolute_values("b3d_revolute")
-    line = "#368 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );"
-    assert line in text
-    src = tmp_path / "shape_in_metres.stp"
-    src.write_text(text.replace(line, line.replace(".MILLI.", "$")))
-    out = tmp_path / "out.stp"
-    proc = cli_in_process("export", "--schema", "ap242", str(src), "-o", str(out))
-    err = proc.stderr.decode()
-    assert proc.returncode == 1, err
-    assert f"p105: error: {src}: #740: link 'base': its representation's context #716 and the context #367" in err
-    assert "other units" in err and not out.exists()
 
 
 @pytest.mark.parametrize("name", ["b3d_revolute", "b3d_cylindrical", "b3d_planar", "b3d_fastened",
