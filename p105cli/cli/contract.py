@@ -42,6 +42,16 @@ Exit status:
   130  interrupted (Ctrl-C)
   141  stdout closed early (e.g. piped into head); nothing is printed"""
 
+#: The epilog of the commands that read mechanisms leniently (part105.model_file: deviations).
+READ_LENIENTLY_TEXT = """Files written the way build123d and Open CASCADE write AP242 kinematics
+(pairs directly among the mechanism's items, links among the topology's,
+explicit values where AP242 derives them, one shared context) are read
+anyway, with one warning per departure naming its #id and the rule it
+breaks; where an explicit value contradicts AP242, AP242 wins and the
+warning says so. validate reports them as errors.
+
+"""
+
 
 class InputError(click.ClickException):
     """Unreadable or malformed input: exit 2 with the message as given."""
@@ -172,12 +182,12 @@ class Progress:
             self._bar.stop()
 
 
-def report_reading(source, model_file) -> None:
-    """Print the warnings reading the mechanisms and pair values of ``model_file`` gave (each
-    names its ``#id``; :func:`p105cli.part105.pair_values.reading_warnings`) on stderr."""
-    from p105cli.part105.pair_values import reading_warnings
-    for message in reading_warnings(model_file):
-        diag("warning", f"{source}: {message}")
+def report_deviations(doc) -> None:
+    """Print, once each, the departures from the schema that the lenient model reader read
+    anyway (``p105: warning: FILE: #id: ...``; p105cli.part105.model_file)."""
+    from p105cli.part105.model_file import take_deviations
+    for message in take_deviations(doc):
+        diag("warning", f"{getattr(doc, 'source', None) or '<stdin>'}: {message}")
 
 
 def report_warnings(doc) -> None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings)
 from .inputs import load_document, naming_source
 from .options import input_argument, output_option, output_schema, stream_option, to_option
 from ._emit import emit_json, emit_p21
@@ -18,8 +19,10 @@ def _convert(doc, schema: str, occt_compat: bool):
 
     with naming_source(doc):
         model = ModelFile.of(doc)  # one population: the mechanism is read and converted from it
-        mechanisms = read_mechanisms(model)
-    report_reading(doc.source, model)
+        try:
+            mechanisms = read_mechanisms(model)
+        finally:
+            report_deviations(doc)
     if len(mechanisms) != 1:
         what = "no mechanism" if not mechanisms else f"{len(mechanisms)} mechanisms"
         raise InputError(f"{doc.source}: holds {what}; --schema converts a file with one mechanism")
@@ -30,7 +33,7 @@ def _convert(doc, schema: str, occt_compat: bool):
     return out
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
 @output_schema(["ap214", "p105", "ap242"],
                help="Convert the mechanism to this schema profile's layout (ap214 and p105: the "
@@ -65,6 +68,13 @@ def export(to, schema, occt_compat, input, output, stream):
     leaves actuation, loops and sequences out (each reported), so the file
     loads there with an empty check list. Without it the output is the
     standard form, which p105 validate passes.
+
+    With --schema a file read with departures from its schema (warned as
+    graph and solve warn them) is repaired: the converted mechanism is
+    written in the standard form, each link representation in its shape's
+    context and in a context of its own, the 1996 ground in one of its own
+    (each repair a warning). What cannot be repaired is exit 1 naming it,
+    and nothing is written.
     """
     if stream and to != "json":
         raise click.UsageError("--stream applies to --to json only")
@@ -76,7 +86,8 @@ def export(to, schema, occt_compat, input, output, stream):
         report_warnings(doc)
         try:
             doc = _convert(doc, schema, occt_compat)
-        except NotWritableError as err:  # the target cannot express it: no output, not a bad input
+        except NotWritableError as err:  # the target cannot express it or the source cannot be
+            # repaired to conform (convert.RepairError): no output, not a bad input
             diag("error", f"{doc.source}: {err}")
             return ExitCode.FINDINGS
     with open_output(output, (input,)) as out:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, Settings, diag, open_output, report_reading, \
-    report_warnings
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, Settings, diag, open_output,
+                       report_deviations, report_warnings)
 from .inputs import load_document
 from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_option, output_option, input_schema, \
     to_option, tol_option
@@ -14,7 +14,7 @@ from .options import SCHEMA_HELP_SHORT, check_tol, input_argument, mechanism_opt
 GRAPH_FORMATS = ("json", "dot", "graphml", "mermaid")
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @to_option(GRAPH_FORMATS + ("p21",),
            help="Output format: the analysis as json (default), dot, graphml or mermaid; with --enrich "
                 "the model as p21 or json (default: the input's format).")
@@ -73,8 +73,10 @@ def _mechanisms(doc, schema, name):
     except UnknownSchemaError as err:
         raise InputError(f"{doc.source}: {err}") from None
     model = ModelFile.of(doc, schema)  # the command's one population
-    mechs = read_mechanisms(model)
-    report_reading(doc.source, model)
+    try:
+        mechs = read_mechanisms(model)
+    finally:
+        report_deviations(doc)
     if name is not None:
         mechs = [m for m in mechs if m.name == name]
         if not mechs:

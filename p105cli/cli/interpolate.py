@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings)
 from .inputs import load_document, naming_source, source_of
 from .options import count_option, input_argument, output_option, schema_option, step_option, to_option
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @input_argument
 @click.option("--what", type=click.Choice(["all", "paths", "configurations"]), default="all", show_default=True,
               help="Sample the kinematic paths, the configuration interpolation sequences, or both.")
@@ -87,7 +88,7 @@ def interpolate(input, what, paths, sequences, t_values, step, count, nodes, qua
     except sampling.SamplingError as err:
         raise InputError(f"{source_of(doc)}: {err}") from None
     report_warnings(doc)
-    report_reading(source_of(doc), model)
+    report_deviations(doc)
     if not result.path_list and not result.sequence_list:
         diag("error", f"{source_of(doc)}: nothing to interpolate (no sampled path or configuration sequence)")
         raise click.exceptions.Exit(ExitCode.FINDINGS)

@@ -13,8 +13,8 @@ from types import SimpleNamespace
 
 import click
 
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, diag, open_output, report_reading, report_warnings, \
-    stderr_is_terminal
+from .contract import (EXIT_STATUS_TEXT, READ_LENIENTLY_TEXT, ExitCode, InputError, diag, open_output,
+                       report_deviations, report_warnings, stderr_is_terminal)
 from .inputs import STDIN, is_stdin, load_document, naming_source, read_text, source_of
 from .options import SCHEMA_HELP_SHORT, angle_unit_option, count_option, file_option, input_schema, \
     length_unit_option, mechanism_option, model_argument, output_option, step_option, to_option, tol_option
@@ -24,7 +24,7 @@ from .solve_scene import check_samples, load_scene, model_scene, prepare_scene, 
 FORMATS = ["model", "jsonl", "csv"]
 
 
-@click.command(epilog=EXIT_STATUS_TEXT)
+@click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @model_argument
 @file_option("--values", "values",
              help="Driven pair values, one configuration per row: CSV with a header of pair names "
@@ -166,9 +166,10 @@ def _read_model(model, schema, mechanism):
     report_warnings(doc)
     with naming_source(doc):
         mf = ModelFile.of(doc, schema)
-        mech = read_mechanism(mf, name=mechanism)
-    report_reading(doc.source, mf)
-    return mf, mech
+        try:
+            return mf, read_mechanism(mf, name=mechanism)
+        finally:
+            report_deviations(doc)
 
 
 def _program(model, mech, count, step):

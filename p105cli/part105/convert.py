@@ -21,12 +21,17 @@ from p105cli.step.values import record_refs as _rec_refs, ref_id
 from .builder import DERIVED, typed
 from .catalogue import (APPLICATION, GEOMETRY_IN_KINEMATICS, HIGHER_GEOMETRY, HIGHER_VALUES,
                         LINK_REPRESENTATION_ENTITIES, LOOP_ENTITIES, MECHANISM_ENTITIES, PROFILES, KINEMATIC_ENTITIES)
-from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, write_kinematics
+from .emit import HIGHER_KINDS_WRITTEN, Emitter, IdBuilder, NotWritableError, write_kinematics
 from .layout import link_reps, occurrence_placement, rep_links
 from .model_file import ModelFile
 from .pair_values import low_order_value_arguments, value_attributes
 
-__all__ = ["Conversion"]
+__all__ = ["Conversion", "RepairError"]
+
+
+class RepairError(NotWritableError):
+    """The source cannot be converted to a file that conforms to the target: the message says
+    what cannot be repaired (``export --schema`` exits 1 with it, writing nothing)."""
 
 
 def _fmt(v) -> str:
@@ -211,8 +216,14 @@ class Conversion:
         self._initial_state()
         mech_ids = self._mechanism()
         self._supporting()
+        self._contexts()
 
         write_kinematics(k, self.diags)
+        if self.mech.pairs and not k.pairs:
+            kinds = ", ".join(sorted({p.kind for p in self.mech.pairs}))
+            raise RepairError(f"#{self.mech.ids.get('mechanism')}: none of the pairs of mechanism {self.mech.name!r} "
+                              f"({kinds}) can be written in {self.profile}: the mechanism would have no joint, "
+                              "which its schema does not allow; not converted")
         self._sequences(k, self.ids, self.consumed)
         k.finish()
         if getattr(k, "loops_written", False):
@@ -385,6 +396,60 @@ class Conversion:
             origin = next((x for x in items if "axis2_placement_3d" in self.types.get(x, ())), None)
             if origin is not None:
                 k.world_origin = {"ref": origin}
+
+    def _contexts(self):
+        """The contexts the target's rules ask for, repaired where the source shares one
+        context among representations the rules keep apart (build123d and Open CASCADE write
+        one context for the whole mechanism): a link representation in the context of the shape
+        it is associated with (kinematic_link_representation_association.wr1), each link
+        representation in a context of its own (a pair_representation_relationship relates two
+        contexts: representation_relationship_with_transformation.wr1), and, in the 1996 layout,
+        the ground in a context of its own (mechanism_base_placement relates it to the base
+        link's representation: the same rule). Each repair is one diagnostic."""
+        k, ids = self.k, self.ids
+        owner: dict = {}  # context id -> the link whose representation is in it
+        # links with a shape first: their context is fixed by it, the others can take a copy
+        for ln in sorted(self.mech.links, key=lambda ln: k.link_shape.get(ln.name) is None):
+            rep = ids["link_rep"].get(ln.name)
+            ctx = ref_id(k.link_ctx.get(ln.name))
+            shape = ref_id(k.link_shape.get(ln.name))
+            shape_ctx = self.mf.ref(shape, "context_of_items") if shape is not None else None
+            if shape_ctx is not None and shape_ctx != ctx:
+                if ctx is not None and not self._same_units(shape_ctx, ctx):
+                    raise RepairError(f"#{rep}: link {ln.name!r}: its representation's context #{ctx} and "
+                                      f"the context #{shape_ctx} of its shape #{shape} have other units; "
+                                      "kinematic_link_representation_association.wr1 wants one context for "
+                                      "both, and p105 does not convert the link's frames between units")
+                self.diags.append(f"#{rep}: link {ln.name!r}: written in the context #{shape_ctx} of its shape "
+                                  f"#{shape}, not #{ctx} (kinematic_link_representation_association.wr1: a link "
+                                  "representation and its shape share one context)")
+                ctx = shape_ctx
+            if ctx in owner:
+                if shape_ctx == ctx:
+                    raise RepairError(f"#{rep}: the shapes of links {owner[ctx]!r} and {ln.name!r} are in one "
+                                      f"context #{ctx}; their link representations must be in their shapes' "
+                                      "context (kinematic_link_representation_association.wr1) and in two "
+                                      "contexts (representation_relationship_with_transformation.wr1 of the "
+                                      "pairs between them): not repaired")
+                new = k.copy_context({"ref": ctx}, f"{ln.name} link")
+                self.diags.append(f"#{rep}: link {ln.name!r}: its context #{ctx} is also link {owner[ctx]!r}'s; "
+                                  f"written in a context of its own, #{ref_id(new)} "
+                                  "(representation_relationship_with_transformation.wr1)")
+                ctx = ref_id(new)
+            owner[ctx] = ln.name
+            k.link_ctx[ln.name] = {"ref": ctx}
+        world = ref_id(k.world_ctx)
+        if self.prof["layout"] == "1996" and world in owner:
+            k.world_ctx = k.copy_context({"ref": world}, f"{self.mech.name} ground")
+            self.diags.append(f"#{world}: the ground is written in a context of its own, "
+                              f"#{ref_id(k.world_ctx)}, not in the context of link {owner[world]!r} "
+                              "(representation_relationship_with_transformation.wr1 of mechanism_base_placement)")
+
+    def _same_units(self, a, b) -> bool:
+        """Whether contexts ``#a`` and ``#b`` give the same length and plane-angle units."""
+        ua, ub = self.mf.context_units(a), self.mf.context_units(b)
+        return all((x[0] if x else None) == (y[0] if y else None)
+                   for x, y in ((ua.length, ub.length), (ua.angle, ub.angle)))
 
     # -- the output
     def _assemble(self) -> list:

@@ -330,18 +330,34 @@ def _read_ap242(mf: ModelFile, m) -> MechanismLayout:
             ml.description = mf.string(pdk, "description")
             ml.ids["product_definition_kinematics"] = pdk
         break
-    for prr in mf.refs(m, "items", types=("pair_representation_relationship",)):
-        p = mf.ref(prr, "transformation_operator", types=("kinematic_pair",))
+    for item in mf.refs(m, "items"):
+        if mf.is_a(item, "kinematic_pair"):  # build123d's AP242 writer
+            p, prr, hints = item, None, (None, None)
+            mf.deviation(p, f"{mf.label(p)} listed directly among the items of mechanism_representation #{m}; "
+                         "AP242 links pairs to a mechanism through pair_representation_relationship "
+                         "(read anyway)")
+        elif not mf.is_a(item, "pair_representation_relationship"):
+            raise model_error(m, f"items of {mf.label(m)} refers to #{item} ({mf.label(item)}), which is no "
+                              "pair_representation_relationship")
+        else:
+            prr = item
+            p = mf.ref(prr, "transformation_operator", types=("kinematic_pair",))
+            hints = (mf.ref(prr, "rep_1", types=("kinematic_link_representation",)),
+                     mf.ref(prr, "rep_2", types=("kinematic_link_representation",)))
         j = mf.ref(p, "joint", types=("kinematic_joint",))
         l1 = mf.ref(j, "edge_start", types=("kinematic_link",))
         l2 = mf.ref(j, "edge_end", types=("kinematic_link",))
-        rep1 = mf.ref(prr, "rep_1", types=("kinematic_link_representation",))
-        rep2 = mf.ref(prr, "rep_2", types=("kinematic_link_representation",))
-        pl = _pair(mf, ml, p, j, l1, l2, hints=(rep1, rep2))
+        pl = _pair(mf, ml, p, j, l1, l2, hints=hints)
         pl.relationship = prr
         _add_pair(ml, pl)
     if topo is not None and mf.is_a(topo, "kinematic_topology_structure"):
-        for j in mf.refs(topo, "items"):  # links of joints without a pair
+        items = mf.refs(topo, "items")
+        links = [x for x in items if mf.is_a(x, "kinematic_link")]
+        if links:  # build123d's AP242 writer: the links of the joints, listed beside them
+            mf.deviation(topo, f"kinematic_topology_structure lists the kinematic_link{'s' * (len(links) > 1)} "
+                         f"{', '.join(f'#{x}' for x in links)} among its items; AP242 allows only "
+                         "kinematic_joint there, the links are the joints' ends (read as the joints' ends)")
+        for j in items:  # links of joints without a pair
             if mf.is_a(j, "kinematic_joint"):
                 for a in ("edge_start", "edge_end"):
                     ml.links.setdefault(mf.ref(j, a, types=("kinematic_link",)), None)
@@ -361,6 +377,13 @@ def _read_ap242(mf: ModelFile, m) -> MechanismLayout:
         named = [s for s in states if "initial" in mf.string(s, "name").lower()]
         st = (named or states)[0]
         ml.ids["initial_state"] = st
+        ctx = mf.ref_value(st, "context_of_items")
+        if ctx is not None:  # Open CASCADE's and build123d's writers
+            own = mf.ref_value(m, "context_of_items")
+            said = ("the same" if ctx == own else
+                    f"another one: the mechanism's #{own} is used, as AP242 derives")
+            mf.deviation(st, f"mechanism_state_representation writes its context #{ctx}, which AP242 derives "
+                         f"from its mechanism #{m} (*); it is {said} (read anyway)")
         for v in mf.refs(st, "items"):
             if not mf.is_a(v, "pair_value"):
                 continue
@@ -416,10 +439,28 @@ def _finish(mf: ModelFile, ml: MechanismLayout) -> MechanismLayout:
             reps = link_reps(mf, link)
             ml.links[link] = reps[0] if reps else None
     ml.link_names = unique_names({link: link_name(mf, link, ml.links[link]) for link in ml.link_order})
+    for link in ml.link_order:
+        _shape_context(mf, ml.links[link])
     names = unique_names({p.id: pair_name(mf, p.id, p.joint_name) for p in ml.pairs})
     for p in ml.pairs:
         p.name = names[p.id]
     return ml
+
+
+def _shape_context(mf: ModelFile, rep) -> None:
+    """Lenient reading: a link representation associated with a shape in another context
+    (build123d and Open CASCADE write one context for the whole mechanism) is one deviation;
+    the link's frames are read in its own representation's context."""
+    ctx = mf.ref_value(rep, "context_of_items") if rep is not None else None
+    for klra in mf.usedin(rep, "kinematic_link_representation_association.rep_1"):
+        shape = mf.ref_value(klra, "rep_2")
+        shape_ctx = mf.ref_value(shape, "context_of_items") if shape in mf else None
+        if (ctx is not None and shape_ctx is not None and shape_ctx != ctx
+                and not mf.is_a(klra, "representation_relationship_with_transformation")):
+            mf.deviation(klra, f"kinematic_link_representation_association relates link representation #{rep} "
+                         f"(context #{ctx}) to shape #{shape} (context #{shape_ctx}); it wants one context for "
+                         "both (its WR1): the link's frames are read in its representation's context #"
+                         f"{ctx} (read anyway)")
 
 
 # --------------------------------------------------------------------------- looking names up

@@ -15,6 +15,13 @@ Access, lenient (the validator; ``ModelFile.of(..., lenient=True)`` or ``mf.leni
 an unset, dangling or mistyped reference, ``refs`` skips what is no reference, ``number``
 returns None; nothing raises.
 
+Lenient reading (the analysis commands): where a file departs from its schema in a way whose
+meaning is plain (build123d's AP242 kinematics: pairs listed directly among the mechanism's
+items, links among the topology's items, explicit values where AP242 derives), the readers read
+it anyway and record one deviation each with :meth:`ModelFile.deviation` (the ``#id`` and the
+rule it breaks); the command prints them with :func:`take_deviations`. ``validate`` reports the
+same departures as errors.
+
 ``scale(rep)`` gives the SI factors of a representation's context (:class:`ContextScale`); a
 missing unit is an error only when a value of its kind is read.
 """
@@ -35,7 +42,7 @@ from .catalogue import choose_profile, layout_of
 # numpy and the kinematics maths are imported where a placement is computed: validating a file
 # (the lenient walk) never needs them
 
-__all__ = ["ModelFile", "ContextScale", "MISSING", "model_error", "open_population"]
+__all__ = ["ModelFile", "ContextScale", "MISSING", "model_error", "open_population", "take_deviations"]
 
 #: What lenient ``get`` returns for an attribute an instance does not have.
 MISSING = object()
@@ -55,6 +62,36 @@ def model_error(iid, message: str) -> ModelError:
     err = ModelError(f"#{iid}: {message}" if iid is not None else message)
     err.instance_id = iid
     return err
+
+
+def _deviations_of(doc) -> dict:
+    """The deviations found in ``doc`` (``(#id, message)`` -> None, in the order found): kept on
+    the document, so that every model file read from it (a command may build more than one)
+    reports to the same place, once."""
+    found = getattr(doc, "_part105_deviations", None)
+    if found is None:
+        found = {}
+        try:
+            doc._part105_deviations = found
+        except (AttributeError, TypeError):  # records given as a list: kept with the model file
+            pass
+    return found
+
+
+def take_deviations(doc) -> list:
+    """The deviations of ``doc`` (a document or a ModelFile) not taken yet, each as ``#id:
+    message``; taking them empties the list (a command reports each once)."""
+    if isinstance(doc, ModelFile):
+        found = doc._deviations
+    else:
+        found = getattr(doc, "_part105_deviations", None) or {}
+    out = _deviation_texts(found)
+    found.clear()
+    return out
+
+
+def _deviation_texts(found: dict) -> list:
+    return [f"#{i}: {m}" if i is not None else m for i, m in found]
 
 
 def open_population(doc, profile=None):
@@ -161,12 +198,14 @@ class ModelFile:
             other = _shared
             self.doc, self.pop, self.profile = other.doc, other.pop, other.profile
             self.units, self._scales, self._cache = other.units, other._scales, other._cache
+            self._deviations = other._deviations
         else:
             self.pop, self.profile = open_population(doc, profile)
             self.doc = getattr(self.pop, "doc", doc)
             self.units = UnitReader(self.pop)
             self._scales: dict = {}
             self._cache: dict = {}  # results computed once per file (the layout walk, ...)
+            self._deviations = _deviations_of(self.doc)
             # the population's model file: every reader given this population shares its walks
             self.pop._part105_model_file = weakref.ref(self)
         self.schema = self.pop.schema
@@ -206,6 +245,17 @@ class ModelFile:
         if key not in self._cache:
             self._cache[key] = compute()
         return self._cache[key]
+
+    def deviation(self, iid, message: str) -> None:
+        """Record that ``#iid`` departs from the schema in the way ``message`` says (the rule it
+        breaks, and how it is read anyway; a pair value projected onto its pair's freedoms); the
+        same deviation is recorded once."""
+        self._deviations.setdefault((iid, message), None)
+
+    def deviations(self) -> list:
+        """The deviations recorded so far and not taken (:func:`take_deviations`), each as
+        ``#id: message``, in the order found."""
+        return _deviation_texts(self._deviations)
 
     # ---------------------------------------------------------------- basics
     def __contains__(self, i) -> bool:

@@ -14,7 +14,7 @@ Families (ISO 10303-105 5.5; both layouts write them alike):
   type: its six components (tx, ty, tz, rx, ry, rz) give the pair's values through
   ``kinematics.pairs.low_order_components`` (the one table); a component the pair's
   freedoms lock that is not 0 is left out with a warning naming the value (the value
-  projected onto the pair's freedoms, :func:`reading_warnings`); on a pair without
+  projected onto the pair's freedoms, :meth:`ModelFile.deviation`); on a pair without
   low-order freedoms (screw, gear, rack and pinion, higher pairs) it is an error;
 * higher pairs: points on the pair's curves/surfaces (``point_on_curve`` /
   ``point_on_surface`` on the pair's geometry, their parameters converted with the Part 42
@@ -35,7 +35,7 @@ from ..schema.values import untyped as _untyped
 from .catalogue import HIGHER_KINDS, HIGHER_PAIR_VALUES
 from .model_file import ContextScale, ModelFile, model_error
 
-__all__ = ["PairValueFormat", "reading_warnings", "note_reading", "is_angle", "curve_parameter_factor", "surface_parameter_factors", "on_curve"]
+__all__ = ["PairValueFormat", "is_angle", "curve_parameter_factor", "surface_parameter_factors", "on_curve"]
 
 
 def is_angle(value_name: str) -> bool:
@@ -50,17 +50,6 @@ _is_angle = is_angle
 #: A component of a low-order value below this (SI: m or rad) is 0: a projection that drops
 #: it changes nothing worth a warning.
 _LOCKED_COMPONENT = 1e-12
-
-
-def reading_warnings(mf: ModelFile) -> list:
-    """The warnings reading the mechanisms and values of ``mf`` gave so far, each
-    ``"#id: message"``, in the order they were found, each once."""
-    return list(mf.cached("reading.warnings", dict))
-
-
-def note_reading(mf: ModelFile, iid, message: str) -> None:
-    """Record a reading warning about ``#iid`` (once per file, however often it is read)."""
-    mf.cached("reading.warnings", dict).setdefault(f"#{iid}: {message}", None)
 
 
 class PairValueFormat:
@@ -116,7 +105,7 @@ class PairValueFormat:
             pair_id = d.ref_value(v, "applies_to_pair")
             said = ", ".join(f"{LOW_ORDER.value_names[i]} = {d.number(v, LOW_ORDER.value_names[i]):g}"
                              for i in dropped)
-            note_reading(d, v, f"low_order_kinematic_pair_value gives {said}, which the {kind} pair "
+            d.deviation(v, f"low_order_kinematic_pair_value gives {said}, which the {kind} pair "
                                f"#{pair_id} cannot move (its freedoms lock it); read as 0 (the value "
                                "projected onto the pair's freedoms)")
         if kind == "low_order":

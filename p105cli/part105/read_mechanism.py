@@ -89,6 +89,7 @@ from ..kinematics import placements as pl
 from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
 from ..kinematics.pairs import FREEDOM_NAMES, LOW_ORDER, low_order_components, named_low_order
+from ..schema.model import Literal
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
 from ..schema.values import number as _num
@@ -157,6 +158,8 @@ class _Reader:
             ids["actuator"] = pl_.actuator
         if pl_.relationship is not None:
             ids["relationship"] = pl_.relationship
+        if self.layout == "ap242":
+            self._explicit_derived(p, entity)
         params = self._params(p, kind, s1, generic)
         for key, f, sc in (("su_1", f1, s1), ("su_2", f2, s2)):
             if d.is_a(f, "su_parameters"):  # kept so that a writer can give the frame back as written
@@ -217,6 +220,37 @@ class _Reader:
         shown = "+".join(names) or "kinematic_pair"
         raise model_error(p, f"{shown}: this pair type is not supported by the kinematics model "
                      "(see docs/model.md)")
+
+    def _explicit_derived(self, p, entity) -> None:
+        """Lenient reading: the freedom flags and the transformation's name of an AP242 pair,
+        which AP242 derives (``*``), written explicitly (Open CASCADE's and build123d's writers
+        do). The pair moves as its entity says; one deviation names what the file writes, and
+        says plainly where it contradicts the standard (the DERIVE clauses of the schema)."""
+        d = self.d
+        written = []
+        conflicts = []
+        derived = _derived_flags(d.schema, entity)
+        if derived is not None:
+            raw = [d.get(p, f"low_order_kinematic_pair.{f}", None) for f in FREEDOM_NAMES]
+            if any(v is not None and not (type(v) is dict and v.get("derived")) for v in raw):
+                written.append("the freedom flags t_x .. r_z")
+                says = tuple(_is_true(v) for v in raw)
+                if says != derived:
+                    conflicts.append(_motion_conflict(says, derived, entity))
+        name = d.get(p, "item_defined_transformation.name", None)
+        if isinstance(name, str):
+            written.append("item_defined_transformation.name")
+            own = d.string(p, "representation_item.name")
+            if name != own:
+                conflicts.append(f"the file names its transformation {name!r}, AP242 derives the pair's own "
+                                 f"name {own!r}")
+        if written:
+            if conflicts:
+                d.deviation(p, f"{d.label(p)} writes {' and '.join(written)} where AP242 derives them, and "
+                            f"contradicts the derivation: {'; '.join(conflicts)} (read as AP242 derives)")
+            else:
+                d.deviation(p, f"{d.label(p)} writes {' and '.join(written)} where AP242 derives them (*); "
+                            "the values agree with the derivation (read anyway)")
 
     def _flags(self, p) -> tuple:
         """The freedom flags (t_x, ..., r_z) of a generic low_order_kinematic_pair."""
@@ -423,6 +457,40 @@ class _Reader:
         return Mechanism(ml.name, links, pairs, names[ml.base], T_world_base=T_world_base,
                          initial=initial, units=units, profile=self.profile,
                          description=ml.description, ids=dict(ml.ids))
+
+
+def _derived_flags(schema, entity: str) -> Optional[tuple]:
+    """The freedom flags (t_x .. r_z) the schema's DERIVE clauses give ``entity`` (its own or a
+    supertype's), None when it derives none (the generic low_order_kinematic_pair states them)."""
+    found: dict = {}
+    todo, seen = [entity], set()
+    while todo:
+        e = schema.entities.get(todo.pop(0))
+        if e is None or e.name in seen:
+            continue
+        seen.add(e.name)
+        for a in e.derived:
+            if a.supertype == "low_order_kinematic_pair" and isinstance(a.expr, Literal):
+                found.setdefault(a.name, a.expr.value is True)  # the most specific clause wins
+        todo.extend(e.supertypes)
+    return tuple(found[f] for f in FREEDOM_NAMES) if all(f in found for f in FREEDOM_NAMES) else None
+
+
+def _motion_words(flags: tuple) -> str:
+    """Freedom flags (t_x .. r_z as 0/1) in words: "translation along z, rotation about z"."""
+    t = [a for a, f in zip("xyz", flags[:3]) if f]
+    r = [a for a, f in zip("xyz", flags[3:]) if f]
+    parts = ([f"translation along {' and '.join(t)}"] if t else []) + \
+        ([f"rotation about {' and '.join(r)}"] if r else [])
+    return ", ".join(parts) or "no motion"
+
+
+def _motion_conflict(says: tuple, derived: tuple, entity: str) -> str:
+    """What the file's flags say against what AP242 derives, in the domain's words."""
+    if sum(says) == sum(derived) == 1 and not any(says[3:]) and not any(derived[3:]):
+        return (f"file says the slider moves along {'xyz'[says.index(1)]}; AP242 derives "
+                f"{'xyz'[derived.index(1)]} for a {entity}")
+    return f"file says the pair allows {_motion_words(says)}; AP242 derives {_motion_words(derived)} for a {entity}"
 
 
 # --------------------------------------------------------------------------- entry points

@@ -77,11 +77,6 @@ def test_the_base_placement_verdict_is_what_an_ap242_reader_finds_in_the_convert
 from conftest import SHARED  # noqa: E402
 
 LOW_ORDER_DEFECTS = ("four_bar_low_order_value", "four_bar_low_order_pair", "b3d_spherical_as_low_order")
-#: build123d shares one context among its link representations and gives a link representation
-#: the context of another shape: WR1s of kinematic_link_representation_association and
-#: pair_representation_relationship that the context repair of the lenient reader fixes, not
-#: the low-order writing tested here.
-SHARED_CONTEXTS = pytest.mark.xfail(strict=True, reason="build123d's shared contexts are not repaired yet")
 
 
 def _external(name):
@@ -109,8 +104,7 @@ def _written(mech, profile, source):
     return read_step(buf.getvalue(), f"{source.source}.{profile}.stp"), diags
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=SHARED_CONTEXTS) if n.startswith("b3d") else n
-                                  for n in LOW_ORDER_DEFECTS])
+@pytest.mark.parametrize("name", LOW_ORDER_DEFECTS)
 @pytest.mark.parametrize("target", ("ap242", "ap214", "p105"))
 def test_low_order_files_convert_in_every_direction_and_validate(name, target):
     """Each file with low-order pairs or values, converted to every profile and that output back

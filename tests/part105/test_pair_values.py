@@ -125,27 +125,24 @@ def test_a_low_order_value_on_any_low_order_pair_is_read_by_its_own_type():
     for k in kinds:
         assert got.initial[k] == pytest.approx(ref.initial[k], rel=1e-15, abs=1e-15), k
         assert got.initial[k] == pytest.approx(CHAIN_VALUES[k], rel=1e-12), k
-    from p105cli.part105.pair_values import reading_warnings
-    assert reading_warnings(mf) == []
+    assert mf.deviations() == []
 
 
 def test_a_locked_component_is_projected_away_with_a_warning_naming_the_value():
     """A revolute pair's value with actual_translation_z = 5 (metres here) and a spherical one
     with a translation: read as the pair's free values, one warning each, naming the #id."""
-    from p105cli.part105.pair_values import reading_warnings
-
     doc, ids = _chain_doc(("revolute", "spherical"), {"revolute": [(2, 5.0)], "spherical": [(0, 0.25)]})
     mf = ModelFile.of(doc)
     (m,) = rm.read_mechanisms(mf)
     assert m.initial["revolute"] == pytest.approx(CHAIN_VALUES["revolute"], rel=1e-15)
     assert m.initial["spherical"] == pytest.approx(CHAIN_VALUES["spherical"], rel=1e-15)
-    warnings = reading_warnings(mf)
+    warnings = mf.deviations()
     assert len(warnings) == 2
     assert warnings[0].startswith(f"#{ids['revolute']}: ") and "actual_translation_z = 5" in warnings[0]
     assert "revolute pair" in warnings[0] and "projected" in warnings[0]
     assert warnings[1].startswith(f"#{ids['spherical']}: ") and "actual_translation_x = 0.25" in warnings[1]
     rm.read_mechanisms(mf)  # read again: each warning once
-    assert reading_warnings(mf) == warnings
+    assert mf.deviations() == warnings
 
 
 def test_a_low_order_value_on_a_motion_coupled_pair_is_an_error():
