@@ -187,7 +187,7 @@ from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
     "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
-    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "named_low_order", "low_order_components",
+    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "motion_in_words", "named_low_order", "low_order_components",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -697,6 +697,16 @@ def _rc_j(q, p, shape):
 
 _FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
 FREEDOM_NAMES = _FLAGS
+
+
+def motion_in_words(flags) -> str:
+    """Freedom flags (t_x .. r_z, truthy where free) in words, for messages that set what a file
+    says against what the standard derives: "translation along z, rotation about x and z"."""
+    t = [a for a, f in zip("xyz", flags[:3]) if f]
+    r = [a for a, f in zip("xyz", flags[3:]) if f]
+    parts = ([f"translation along {' and '.join(t)}"] if t else []) + \
+        ([f"rotation about {' and '.join(r)}"] if r else [])
+    return ", ".join(parts) or "no motion"
 
 #: The one table of what a flag set and a low-order value mean: kind -> (the flags t_x..r_z
 #: AP242 derives for it, the component (0..5 = tx, ty, tz, rx, ry, rz) of a

@@ -88,7 +88,7 @@ import numpy as np
 from ..kinematics import placements as pl
 from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
-from ..kinematics.pairs import FREEDOM_NAMES, LOW_ORDER, low_order_components, named_low_order
+from ..kinematics.pairs import FREEDOM_NAMES, LOW_ORDER, low_order_components, motion_in_words, named_low_order
 from ..schema.model import Literal
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
@@ -476,21 +476,12 @@ def _derived_flags(schema, entity: str) -> Optional[tuple]:
     return tuple(found[f] for f in FREEDOM_NAMES) if all(f in found for f in FREEDOM_NAMES) else None
 
 
-def _motion_words(flags: tuple) -> str:
-    """Freedom flags (t_x .. r_z as 0/1) in words: "translation along z, rotation about z"."""
-    t = [a for a, f in zip("xyz", flags[:3]) if f]
-    r = [a for a, f in zip("xyz", flags[3:]) if f]
-    parts = ([f"translation along {' and '.join(t)}"] if t else []) + \
-        ([f"rotation about {' and '.join(r)}"] if r else [])
-    return ", ".join(parts) or "no motion"
-
-
 def _motion_conflict(says: tuple, derived: tuple, entity: str) -> str:
     """What the file's flags say against what AP242 derives, in the domain's words."""
     if sum(says) == sum(derived) == 1 and not any(says[3:]) and not any(derived[3:]):
         return (f"file says the slider moves along {'xyz'[says.index(1)]}; AP242 derives "
                 f"{'xyz'[derived.index(1)]} for a {entity}")
-    return f"file says the pair allows {_motion_words(says)}; AP242 derives {_motion_words(derived)} for a {entity}"
+    return f"file says the pair allows {motion_in_words(says)}; AP242 derives {motion_in_words(derived)} for a {entity}"
 
 
 # --------------------------------------------------------------------------- entry points

@@ -40,6 +40,7 @@ Entry point: ``check_derived(pop, candidates=None) -> list[Finding]``.
 
 from __future__ import annotations
 
+from ..kinematics.pairs import FREEDOM_NAMES, motion_in_words
 from ..schema.evaluator import EntityValue, EnumValue, Evaluator, NotEvaluable, TypedValue
 from ..schema.instance import Instance
 from ..schema.model import BinaryOp, Name
@@ -62,9 +63,6 @@ RULES = {
 _SAME_INSTANCE = BinaryOp(":=:", Name("file_value"), Name("derived_value"))
 _SAME_VALUE = BinaryOp("=", Name("file_value"), Name("derived_value"))
 
-# The freedom flags of a low-order pair (ISO 10303-105 ed2 low_order_kinematic_pair), in words.
-_FREEDOMS = {"t_x": "translates along x", "t_y": "translates along y", "t_z": "translates along z",
-             "r_x": "rotates about x", "r_y": "rotates about y", "r_z": "rotates about z"}
 _DIMENSIONS = (("length_exponent", "length"), ("mass_exponent", "mass"), ("time_exponent", "time"),
                ("electric_current_exponent", "current"),
                ("thermodynamic_temperature_exponent", "temperature"),
@@ -171,16 +169,16 @@ def _conflict(ev, inst, differ, standard) -> str:
                 f"writes it explicitly, and it must agree)")
     else:
         text = f"file says {said}; {standard} derives {derived}"
-    if any(s.name in _FREEDOMS for s, *_ in differ):
+    if any(s.name in FREEDOM_NAMES for s, *_ in differ):
         text += _freedoms_in_words(ev, inst, differ)
     return text
 
 
 def _freedoms_in_words(ev, inst, differ) -> str:
-    """'(the file's pair translates along z; a prismatic_pair translates along x)'."""
+    """'(the file's pair allows translation along z; a prismatic_pair allows translation along x)'."""
     file_flags, derived_flags = {}, {}
     for i, slot in enumerate(inst.layout.slots):
-        if slot.name not in _FREEDOMS:
+        if slot.name not in FREEDOM_NAMES:
             continue
         try:
             d = ev.attribute(inst, slot.name, group=slot.entity)
@@ -192,10 +190,9 @@ def _freedoms_in_words(ev, inst, differ) -> str:
         file_flags[slot.name] = ev.convert(raw, slot.type, inst) if written else d
 
     def words(flags):
-        moves = [_FREEDOMS[n] for n in _FREEDOMS if flags.get(n) is True]
-        return " and ".join(moves) if moves else "does not move"
+        return motion_in_words([flags.get(n) is True for n in FREEDOM_NAMES])
     leaf = "+".join(sorted(inst.leaf_types))
-    return f" (the file's pair {words(file_flags)}; {_a(leaf)} {words(derived_flags)})"
+    return f" (the file's pair allows {words(file_flags)}; {_a(leaf)} allows {words(derived_flags)})"
 
 
 def _show(ev, v, depth: int = 0) -> str:

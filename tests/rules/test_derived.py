@@ -122,7 +122,7 @@ def test_prismatic_flags_contradicting_ap242_are_an_error_in_the_domains_words()
     assert (d.rule, d.severity, d.entity) == ("SCH-DERIVED-CONFLICT", "error", 10)
     assert d.message.startswith("t_x, t_z: file says t_x = FALSE, t_z = TRUE; "
                                 "AP242 derives t_x = TRUE, t_z = FALSE")
-    assert "the file's pair translates along z; a prismatic_pair translates along x" in d.message
+    assert "the file's pair allows translation along z; a prismatic_pair allows translation along x" in d.message
 
 
 def test_prismatic_flags_copied_from_ap242_are_one_warning():
