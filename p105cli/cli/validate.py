@@ -34,7 +34,9 @@ def _check_one(path: str, schema: str | None, timings: bool):
         diag = Diagnostic("P21-SYNTAX", "error", err.message, source, err.line or None, err.column or None)
     except StepError as err:
         entity = getattr(err, "instance_id", None)
-        diag = Diagnostic("P21-STRUCTURE", "error", err.message, source, entity=entity)
+        pointer = getattr(err, "pointer", "")  # a JSON model's place (/data/0), as the other commands say it
+        message = f"{pointer}: {err.message}" if pointer.startswith("/") else err.message
+        diag = Diagnostic("P21-STRUCTURE", "error", message, source, entity=entity)
     except UnknownSchemaError as err:
         diag = Diagnostic("P21-SCHEMA", "error", str(err), source)
     return RunResult.make(source, [diag], readable=False), None
