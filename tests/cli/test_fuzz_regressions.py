@@ -383,3 +383,17 @@ def test_an_error_that_diverged_is_null_in_json_lines_and_empty_in_csv():
     assert solve_records._f(-0.0) == 0.0 and solve_records._f(2.5) == 2.5
     row = "3,0.5,not_converged,0.1,inf,-inf,nan,7,1.0"
     assert solve_records._NONFINITE_CELL.sub("", row) == "3,0.5,not_converged,0.1,,,,7,1.0"
+
+
+# ---------------------------------------------------------------- the fuzzer, in CI
+FUZZ_SEED, FUZZ_ROUNDS = 105, 30
+
+
+def test_a_short_fixed_seed_fuzz_run_of_every_command_ends_in_no_crash(tmp_path):
+    # make fuzz for a fixed budget: the same inputs every run (a seed and a number of inputs,
+    # not a time), every command on each; a crash prints its input and command line
+    import fuzz_commands
+
+    f = fuzz_commands.fuzz(FUZZ_SEED, rounds=FUZZ_ROUNDS, out_dir=tmp_path, log=lambda s: None)
+    assert f.inputs == FUZZ_ROUNDS and f.runs >= 5 * FUZZ_ROUNDS
+    assert not f.crashes and not f.slow, json.dumps(f.summary()["crashes"], indent=1)
