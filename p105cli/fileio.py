@@ -16,6 +16,7 @@ no longer run.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import re
 import socket
@@ -23,6 +24,11 @@ import tempfile
 
 #: Marks p105's temporary files among other hidden files of a directory.
 TEMP_MARK = ".p105-"
+
+#: errno values of a device that refuses the data (a full disk, a quota, a file size limit):
+#: the environment's failure, reported with the path (exit 2), not a bug.
+DEVICE_ERRNOS = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EFBIG", "EIO", "EROFS")
+                          if hasattr(errno, name))
 
 
 class AtomicWriteError(OSError):
@@ -143,8 +149,11 @@ def atomic_file(path, binary: bool = False):
     pending = PendingFile(path, binary)
     try:
         yield pending.file
-    except BaseException:
+        pending.finish()
+    except BaseException as err:
         pending.discard()
+        if isinstance(err, OSError) and err.filename is None and err.errno in DEVICE_ERRNOS:
+            raise OSError(err.errno, err.strerror, pending.path) from None  # (a full disk: say which file)
         raise
     pending.commit()
 

@@ -14,7 +14,6 @@ Subcommand modules use these helpers and :mod:`.inputs` and nothing else for I/O
 from __future__ import annotations
 
 import contextlib
-import errno
 import io
 import os
 import sys
@@ -22,7 +21,7 @@ from enum import IntEnum
 
 import click
 
-from p105cli.fileio import AtomicWriteError, PendingFile
+from p105cli.fileio import DEVICE_ERRNOS, AtomicWriteError, PendingFile
 
 
 class ExitCode(IntEnum):
@@ -97,9 +96,6 @@ def _stdout_text() -> io.TextIOWrapper:
                             write_through=False, line_buffering=False)
 
 
-#: errno values that say the output's device refused the data: the environment, not p105
-WRITE_ERRNOS = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EFBIG", "EIO", "EROFS")
-                         if hasattr(errno, name))
 
 STDOUT_NAME = "<stdout>"
 
@@ -109,7 +105,7 @@ _pending: list[PendingFile] = []
 
 def is_write_error(err: BaseException) -> bool:
     """A write refused by the device (a full disk, a quota): exit 2 with the path, not a bug."""
-    return isinstance(err, OSError) and err.errno in WRITE_ERRNOS
+    return isinstance(err, OSError) and err.errno in DEVICE_ERRNOS
 
 
 def write_error(path: str, err: OSError) -> "OutputError":

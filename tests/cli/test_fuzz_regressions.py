@@ -321,8 +321,7 @@ def test_every_reproducer_is_run():
     if not CRASHES.is_dir():
         pytest.skip("no ../shared/external/crashes")
     ran = {a for case in _cases() for a in case.values[0]}
-    assert set(_reproducers()) - ran <= {"D16_scene.json", "D16_keypoints.jsonl"} - ran
-    assert {"D16_scene.json", "D16_keypoints.jsonl"} <= ran
+    assert len(_reproducers()) >= 35 and set(_reproducers()) <= ran
 
 
 @pytest.mark.skipif(not CRASHES.is_dir(), reason="no ../shared/external/crashes")

@@ -163,3 +163,27 @@ def test_the_temporaries_of_running_processes_are_left_alone(tmp_path):
     assert sorted(_temporaries(tmp_path)) == sorted([os.path.basename(mine.temp), other.name])
     mine.commit()
     assert target.exists() and os.path.basename(mine.temp) not in os.listdir(tmp_path)
+
+
+def test_a_full_device_under_atomic_file_names_the_file(tmp_path):
+    # the pictures of solve --plot/--animate and the man pages are written with atomic_file:
+    # the error carries the path, so main() names it (not <stdout>)
+    from p105cli.fileio import atomic_file
+
+    code = ("import resource, signal, sys\n"
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (100, 100))\n"
+            "from p105cli.fileio import atomic_file\n"
+            "try:\n"
+            "    with atomic_file(sys.argv[1]) as fh:\n"
+            "        fh.write('x' * 1000)\n"
+            "except OSError as err:\n"
+            "    print(err.errno, err.filename)\n")
+    target = tmp_path / "picture.svg"
+    r = subprocess.run([sys.executable, "-c", code, str(target)], capture_output=True, cwd=ROOT, timeout=60)
+    import errno
+    assert r.stdout.decode().split() == [str(errno.EFBIG), str(target)], r.stderr
+    assert _names(tmp_path) == []
+    with atomic_file(target) as fh:  # and without a limit, it is written
+        fh.write("x")
+    assert target.read_text() == "x" and _names(tmp_path) == ["picture.svg"]
