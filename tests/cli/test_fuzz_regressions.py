@@ -396,3 +396,19 @@ def test_a_short_fixed_seed_fuzz_run_of_every_command_ends_in_no_crash(tmp_path)
     f = fuzz_commands.fuzz(FUZZ_SEED, rounds=FUZZ_ROUNDS, out_dir=tmp_path, log=lambda s: None)
     assert f.inputs == FUZZ_ROUNDS and f.runs >= 5 * FUZZ_ROUNDS
     assert not f.crashes and not f.slow, json.dumps(f.summary()["crashes"], indent=1)
+
+
+@pytest.mark.skipif(not (SHARED / "external" / "defects" / "four_bar_low_order_pair.stp").is_file(),
+                    reason="no shared files")
+@pytest.mark.parametrize("drive", [["--set", "B=0.5,0.1,0.2"], ["--set", "B[3]=0.5"], ["--sweep", "B[0]=0:1:3"]],
+                         ids=" ".join)
+def test_a_locked_freedom_driven_away_from_0_is_named(p105, drive):
+    # make fuzz (seed 20261126): ValueError from the low order pair's motion (exit 3)
+    path = SHARED / "external" / "defects" / "four_bar_low_order_pair.stp"
+    r = p105("solve", *drive, "--no-timings", "--to", "jsonl", path)
+    assert r.returncode == 2 and r.stdout == b""
+    last = _no_crash(r).splitlines()[-1]
+    assert last.startswith(f"p105: error: {path}: #183: mechanism 'four_bar': pair 'B': driven values: low order "
+                           "kinematic pair: ") and "locks value" in last and last.endswith("which must be 0")
+    ok = p105("solve", "--set", "B[5]=0.5", "--no-timings", "--to", "jsonl", path)  # its free rotation
+    assert ok.returncode in (0, 1) and "driven values" not in _no_crash(ok)
