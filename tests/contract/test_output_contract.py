@@ -187,3 +187,25 @@ def test_a_full_device_under_atomic_file_names_the_file(tmp_path):
     with atomic_file(target) as fh:  # and without a limit, it is written
         fh.write("x")
     assert target.read_text() == "x" and _names(tmp_path) == ["picture.svg"]
+
+
+def test_numpy_warnings_never_reach_stderr():
+    # D02/D21 of the shared audit printed "RuntimeWarning: overflow encountered in dot" and
+    # "One of rtol or atol is not valid"; what they signal is checked where it matters, and
+    # the warnings themselves are not p105 diagnostics (-vv shows them)
+    code = ("import sys, numpy as np\n"
+            "import p105cli.kinematics.graph as g\n"
+            "original = g.analyse\n"
+            "def analyse(*a, **k):\n"
+            "    np.float64(1e308) * 10.0\n"
+            "    np.isclose(1.0, 1.0, atol=float('inf'))\n"
+            "    return original(*a, **k)\n"
+            "g.analyse = analyse\n"
+            "from p105cli.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    quiet = subprocess.run([sys.executable, "-c", code, "graph", str(EXAMPLE)], capture_output=True, cwd=ROOT,
+                           timeout=120)
+    assert quiet.returncode == 0 and quiet.stderr == b"", quiet.stderr
+    loud = subprocess.run([sys.executable, "-c", code, "-vv", "graph", str(EXAMPLE)], capture_output=True,
+                          cwd=ROOT, timeout=120)
+    assert loud.returncode == 0 and b"RuntimeWarning: overflow" in loud.stderr
