@@ -196,24 +196,22 @@ def replace_number(rng, text: str) -> str:
     return text[:m.start()] + rng.choice(ODD_NUMBERS + [m.group(0) + "0" * 3]) + text[m.end():]
 
 
-def _argument_tokens(rng, text: str) -> tuple[re.Match, list[re.Match]] | None:
-    """An instance and the argument tokens of its parameter list."""
+def _one_argument(rng, text: str):
+    """``(instance, its argument tokens, one of them)`` of a random instance, or None."""
     inst = _instances(text)
     if not inst:
         return None
     m = rng.choice(inst)
-    eq = m.group(0).find("=")
-    tokens = [t for t in _TOKEN.finditer(m.group(0), eq + 1)]
-    return (m, tokens) if tokens else None
+    tokens = list(_TOKEN.finditer(m.group(0), m.group(0).find("=") + 1))
+    return (m, tokens, rng.choice(tokens)) if tokens else None
 
 
 def replace_argument(rng, text: str) -> str:
     """One argument of one instance becomes another kind of value, or goes, or is doubled."""
-    found = _argument_tokens(rng, text)
+    found = _one_argument(rng, text)
     if found is None:
         return text
-    m, tokens = found
-    t = rng.choice(tokens)
+    m, tokens, t = found
     body = m.group(0)
     pool = ODD_TOKENS + [u.group(0) for u in tokens]
     kind = rng.random()
@@ -231,11 +229,10 @@ def replace_argument(rng, text: str) -> str:
 
 def nest_argument(rng, text: str) -> str:
     """An argument wrapped in one or many list levels."""
-    found = _argument_tokens(rng, text)
+    found = _one_argument(rng, text)
     if found is None:
         return text
-    m, tokens = found
-    t = rng.choice(tokens)
+    m, _, t = found
     depth = rng.choice((1, 1, 2, 3, 300))
     body = m.group(0)
     new = body[:t.start()] + "(" * depth + t.group(0) + ")" * depth + body[t.end():]
