@@ -16,7 +16,7 @@ its key points. Each round takes a seed and mutates it at one of three levels:
 
 and runs every command on it in this process (``make_golden.run_in_process``): parse,
 validate, graph (json, --enrich), export --schema ap214|ap242|p105 and --to p21|json, solve
-(initial, --program, --set, --sweep, --values, --to model|jsonl|csv), interpolate,
+(initial, --program, --set, --sweep, --values, --to model|jsonl|csv), interpolate (and its --what, --to),
 convert-dh-su; solve --scene for mutated scenes and key points. A run is a crash when it
 ends with an exit status other than 0, 1 or 2, with a traceback or "internal error", with
 a Python warning on stderr, with NaN or Infinity in JSON or CSV output, or when a failed
@@ -438,6 +438,10 @@ def model_commands(rng, path: str, text: str, work: Path) -> list[list[str]]:
             ["solve", "--program", "--count", "3", "--no-timings", "--to", "jsonl", path],
             ["solve", "--no-timings", "--to", rng.choice(["model", "csv"]), path],
             ["interpolate", path],
+            ["interpolate", "--what", rng.choice(["paths", "configurations"]), "--count", "5", "--to",
+             rng.choice(["jsonl", "csv"]), path],
+            ["graph", "--to", rng.choice(["dot", "graphml", "mermaid"]), path],
+            ["validate", "--pass", "-o", os.devnull, path],
             ["convert-dh-su", "--to", "dh", "--convention", "standard", path]]
     names = [m.group(1) for m in (_PAIR_NAME if rng.random() < 0.8 else _NAME).finditer(text)]
     names = [n for n in names if "=" not in n and "," not in n and ":" not in n]
@@ -588,6 +592,8 @@ class Fuzzer:
     def run(self, argv, src, data, kind) -> None:
         self.runs += 1
         target = Path(argv[argv.index("-o") + 1]) if "-o" in argv else None
+        if target is not None and target.exists() and not target.is_file():
+            target = None  # /dev/null: written straight through, nothing to check
         before = target.read_bytes() if target is not None and target.exists() else None
         try:
             code, out, err, _ = run_one(argv)
