@@ -17,10 +17,11 @@ its key points. Each round takes a seed and mutates it at one of three levels:
 and runs every command on it in this process (``make_golden.run_in_process``): parse,
 validate (and --pass), graph (json, --enrich, --to dot|graphml|mermaid), export --schema
 ap214|ap242|p105 and --to p21|json, solve (initial, --program, --set, --sweep, --values,
---to model|jsonl|csv), interpolate (and its --what, --to), convert-dh-su; solve --scene for mutated scenes and key points. A run is a crash when it
-ends with an exit status other than 0, 1 or 2, with a traceback or "internal error", with
-a Python warning on stderr, with NaN or Infinity in JSON or CSV output, or when a failed
-run (``-o``) changed its output file or left a temporary file. Crashes are saved under
+--to model|jsonl|csv), interpolate (and its --what, --to), convert-dh-su; solve --scene
+for mutated scenes and key points. A run is a crash when it ends with an exit status other
+than 0, 1 or 2, with a traceback or "internal error", with a Python warning on stderr, with
+NaN or Infinity in JSON or CSV output, or when a failed run (``-o``) changed its output
+file or left a temporary file. Crashes are saved under
 ``build/fuzz-commands/`` with the command line; the run exits 1 at the end if any.
 
 ``make fuzz`` runs the reader fuzzer (``tests/fuzz_reader.py``) for a share of the time
