@@ -96,7 +96,6 @@ def _stdout_text() -> io.TextIOWrapper:
                             write_through=False, line_buffering=False)
 
 
-
 STDOUT_NAME = "<stdout>"
 
 #: -o outputs written completely and waiting for the command's exit status (see finish_outputs).
