@@ -412,3 +412,24 @@ def test_a_locked_freedom_driven_away_from_0_is_named(p105, drive):
                            "kinematic pair: ") and "locks value" in last and last.endswith("which must be 0")
     ok = p105("solve", "--set", "B[5]=0.5", "--no-timings", "--to", "jsonl", path)  # its free rotation
     assert ok.returncode in (0, 1) and "driven values" not in _no_crash(ok)
+
+
+@pytest.mark.parametrize("how", ["set", "values", "sweep"])
+def test_a_driven_value_beyond_what_can_be_computed_with_is_refused(p105, tmp_path, how):
+    # make fuzz (seed 42): the cam follower's slider driven to 1e300 (--set) or 1e200 (--values)
+    # put the cam's contact point beyond the reals in the loop closure: ValueError, exit 3
+    model = CORPUS / "cam_follower_p105.stp"
+    if how == "set":
+        args, big = ["--set", "guide=1e300"], "1e+300"
+    elif how == "values":
+        values = tmp_path / "values.csv"
+        values.write_text("t,guide\n0,0.1\n1,1e200\n2,2\n")
+        args, big = ["--values", values], "1e+200"
+    else:
+        args, big = ["--sweep", "guide=0:-1e101:3"], "1e+101"
+    r = p105("solve", model, *args, "--no-timings", "--to", "jsonl")
+    assert r.returncode == 2 and r.stdout == b""
+    assert _no_crash(r).splitlines()[-1] == (f"p105: error: guide: {big} is beyond the magnitudes p105 computes "
+                                             "with (1e+100)")
+    ok = p105("solve", model, "--set", "guide=1e99", "--no-timings", "--to", "jsonl")  # far, but computed
+    assert ok.returncode == 1 and "not_assemblable" in _no_crash(ok)
