@@ -623,8 +623,14 @@ class Fuzzer:
         suffix = Path(argv[-1]).suffix
         name = f"crash{len(self.crashes):03d}{suffix}"
         (self.out_dir / name).write_bytes(data)
-        self.crashes[key] = (name, src.name, [*argv[:-1], name], reason)
-        self.log(f"CRASH {name} ({kind} from {src.name}): p105 {' '.join(argv[:-1])} {name}\n  {reason}")
+        command = [*argv[:-1], name]
+        for k, arg in enumerate(command[:-1]):  # the files the command reads besides the input (--values)
+            if arg.startswith(str(self.work)) and os.path.isfile(arg) and command[k - 1] != "-o":
+                kept = f"{Path(name).stem}-{Path(arg).name}"
+                (self.out_dir / kept).write_bytes(Path(arg).read_bytes())
+                command[k] = kept
+        self.crashes[key] = (name, src.name, command, reason)
+        self.log(f"CRASH {name} ({kind} from {src.name}): p105 {' '.join(command)}\n  {reason}")
 
     def summary(self) -> dict:
         return {"seed": self.seed, "inputs": self.inputs, "command_runs": self.runs,
