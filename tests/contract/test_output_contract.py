@@ -5,6 +5,7 @@ writes the same OUT."""
 
 from __future__ import annotations
 
+import errno
 import os
 import resource
 import signal
@@ -16,7 +17,7 @@ import pytest
 
 from conftest import EXAMPLES, ROOT, run_cli
 from p105cli.cli.contract import ExitCode
-from p105cli.fileio import TEMP_MARK, PendingFile, remove_stale_temporaries
+from p105cli.fileio import TEMP_MARK, PendingFile, atomic_file, remove_stale_temporaries
 
 from .test_cli_contract import COMMANDS, EXAMPLE, INPUT, JOB
 
@@ -168,8 +169,6 @@ def test_the_temporaries_of_running_processes_are_left_alone(tmp_path):
 def test_a_full_device_under_atomic_file_names_the_file(tmp_path):
     # the pictures of solve --plot/--animate and the man pages are written with atomic_file:
     # the error carries the path, so main() names it (not <stdout>)
-    from p105cli.fileio import atomic_file
-
     code = ("import resource, signal, sys\n"
             "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
             "resource.setrlimit(resource.RLIMIT_FSIZE, (100, 100))\n"
@@ -181,7 +180,6 @@ def test_a_full_device_under_atomic_file_names_the_file(tmp_path):
             "    print(err.errno, err.filename)\n")
     target = tmp_path / "picture.svg"
     r = subprocess.run([sys.executable, "-c", code, str(target)], capture_output=True, cwd=ROOT, timeout=60)
-    import errno
     assert r.stdout.decode().split() == [str(errno.EFBIG), str(target)], r.stderr
     assert _names(tmp_path) == []
     with atomic_file(target) as fh:  # and without a limit, it is written
