@@ -433,3 +433,17 @@ def test_a_driven_value_beyond_what_can_be_computed_with_is_refused(p105, tmp_pa
                                              "with (1e+100)")
     ok = p105("solve", model, "--set", "guide=1e99", "--no-timings", "--to", "jsonl")  # far, but computed
     assert ok.returncode == 1 and "not_assemblable" in _no_crash(ok)
+
+
+@pytest.mark.parametrize("command", [["graph"], ["solve"], ["export", "--schema", "ap242"], ["interpolate"]],
+                         ids=" ".join)
+def test_a_complex_pair_whose_transform_item_is_itself_is_named(p105, tmp_path, command):
+    # shared crashes/D07b (its seed was a scratch file): the same cycle in a complex instance
+    # (actuated_kinematic_pair+revolute_pair): RecursionError (exit 3) placing its frames
+    path = _edited(tmp_path, "cam_follower_ap242", "ITEM_DEFINED_TRANSFORMATION(*,'cam shaft bearing',#114,#118)",
+                   "ITEM_DEFINED_TRANSFORMATION(*,'cam shaft bearing',#146,#118)")
+    r = p105(*command, path)
+    assert r.returncode == 2
+    assert _no_crash(r).splitlines()[-1] == (
+        f"p105: error: {path}: #146: actuated_kinematic_pair+revolute_pair refers back to itself through its "
+        "transform items: it places nothing")
