@@ -447,3 +447,18 @@ def test_a_complex_pair_whose_transform_item_is_itself_is_named(p105, tmp_path, 
     assert _no_crash(r).splitlines()[-1] == (
         f"p105: error: {path}: #146: actuated_kinematic_pair+revolute_pair refers back to itself through its "
         "transform items: it places nothing")
+
+
+@pytest.mark.parametrize("command", [["interpolate"], ["interpolate", "--what", "configurations", "--to", "csv"],
+                                     ["solve", "--program", "--to", "jsonl", "--no-timings"]], ids=" ".join)
+def test_a_sequence_name_that_is_a_list_is_no_name(p105, tmp_path, command):
+    # make fuzz (seed 4): a configuration sequence named ('...') (a list, not a string):
+    # TypeError: unhashable type: 'list' (exit 3); it is read as unnamed, as a missing name is
+    path = _edited(tmp_path, "spherical_linkage_ap242",
+                   "INTERPOLATED_CONFIGURATION_SEQUENCE('spherical_linkage configurations',",
+                   "INTERPOLATED_CONFIGURATION_SEQUENCE(('spherical_linkage configurations'),")
+    r = p105(*command, path)
+    _no_crash(r)
+    assert r.returncode == 0
+    if command[0] == "interpolate" and "csv" not in command:
+        assert '"sequence": "#245"' in r.stdout.decode()
