@@ -462,3 +462,16 @@ def test_a_sequence_name_that_is_a_list_is_no_name(p105, tmp_path, command):
     assert r.returncode == 0
     if command[0] == "interpolate" and "csv" not in command:
         assert '"sequence": "#245"' in r.stdout.decode()
+
+
+def test_a_placement_whose_ref_direction_is_parallel_to_the_default_axis_is_a_finding(p105, tmp_path):
+    # make fuzz (seed 4): axis unset (an integer in its place), ref_direction (0, 0, 1): the
+    # message formatted the unset axis (TypeError, exit 3 in validate); it is z by default
+    path = _edited(tmp_path, "gear_train_p105", "#166=AXIS2_PLACEMENT_3D('bearing 2 on gear_2',#163,#164,#165);",
+                   "#166=AXIS2_PLACEMENT_3D('bearing 2 on gear_2',#163,-1,#164,#165);")
+    r = p105("validate", "--schema", "p105", path)
+    assert r.returncode == 1
+    _no_crash(r)
+    assert ("error[KIN-PLACEMENT] ref_direction: axis (0, 0, 1) and ref_direction (0, 0, 1) are parallel: the "
+            "placement has no x axis (ISO 10303-42 axis2_placement_3d WR4) (#166 axis2_placement_3d)"
+            in r.stdout.decode())
