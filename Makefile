@@ -9,6 +9,7 @@ P105    = $(BIN)/p105
 STAMP   = $(VENV)/.installed
 SHARED ?= ../shared
 FUZZ_SECONDS ?= 120
+FUZZ_SEED ?=
 
 .PHONY: all install demo test test-all fuzz fuzz-commands man bench bench-parse bench-validate bench-graph bench-solve \
         bench-solve-scale bench-cable clean
@@ -62,12 +63,15 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -q
 
+# Every command in-process on byte, grammar and JSON-model mutations of the corpus, the examples
+# and ../shared/external (exit 0, 1 or 2, never 3; no NaN/Infinity; -o untouched on failure),
+# after the reader fuzzer for a fifth of FUZZ_SECONDS. FUZZ_SEED repeats a run. docs/fuzzing.md.
 fuzz: $(STAMP)
-	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) $(PY) tests/fuzz_reader.py
+	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) P105_FUZZ_SEED=$(FUZZ_SEED) $(PY) tests/fuzz_commands.py --reader-share 0.2
 
-# Every command on mutated corpus, example and ../shared/external files: exit 0, 1 or 2, never 3.
+# The commands only (no reader fuzzer).
 fuzz-commands: $(STAMP)
-	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) $(PY) tests/fuzz_commands.py
+	P105_FUZZ_SECONDS=$(FUZZ_SECONDS) P105_FUZZ_SEED=$(FUZZ_SEED) $(PY) tests/fuzz_commands.py
 
 man: $(STAMP)
 	$(PY) -m p105cli.manpages man

@@ -593,11 +593,20 @@ def _stdout(page: str, cmd: click.Command, ctx: click.Context) -> list[str]:
              *prose("Data only: the result goes to standard output and nothing else does. "
                     "Diagnostics (errors, warnings, notes) go to standard error, so the output "
                     "can always be piped or redirected.")]
-    if _has_output_option(options(cmd, ctx)):
+    opts = options(cmd, ctx)
+    if _has_output_option(opts):
+        partial = any(o.name == "keep_partial" for o in opts)
         lines += [".PP", *prose("With `-o` OUT the data is written to OUT instead, atomically: "
                                 "into a temporary file in the same directory that is renamed "
-                                "into place only when complete. On any failure OUT is left as "
-                                "it was. OUT may not be the input file.")]
+                                "into place only when complete"
+                                + (" and the command ends with exit status 0. On any failure, "
+                                   "exit status 1 included, OUT is left as it was (so `make` runs "
+                                   "the rule again); `--keep-partial` writes it all the same, with "
+                                   "what was computed before the failure. " if partial else
+                                   ", findings or not. On any other failure OUT is left as it was. ")
+                                + "OUT may not be the input file. A temporary file left by a p105 "
+                                "killed while writing OUT is removed by the next p105 that writes OUT. "
+                                "A full disk is exit status 2, naming OUT (or `<stdout>`).")]
     for para in PAGES.get(page, {}).get("stdout", []):
         lines += [".PP", *prose(para)]
     lines += [".PP", *prose("When the reader of standard output goes away early (for example "

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 
 import click
 
 from p105cli import __version__
-from .contract import EXIT_STATUS_TEXT, ExitCode, InputError, PipeClosed, Settings, diag
+from .contract import (EXIT_STATUS_TEXT, STDOUT_NAME, ExitCode, InputError, PipeClosed, Settings, diag,
+                       finish_outputs, is_write_error)
 
 # Subcommands are registered here only when they work; each lives in its own module.
 SUBCOMMANDS = {
@@ -71,6 +73,8 @@ def cli(verbose, quiet):
     from FILE or stdin and writes data, and only data, to stdout.
     """
     Settings.verbosity = -1 if quiet else verbose
+    if verbose > 1:  # numpy's floating-point warnings, for whoever debugs a computation
+        warnings.filterwarnings("default", category=RuntimeWarning)
 
 
 def _quiet_broken_pipe() -> int:
@@ -92,10 +96,27 @@ def _single_threaded_blas() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the p105 CLI and return its exit code."""
-    from p105cli.step.errors import StepError
+    """Run the p105 CLI and return its exit code.
+
+    The -o outputs are renamed into place here, once the exit status is known
+    (contract.finish_outputs)."""
     _single_threaded_blas()
-    Settings.verbosity = 0
+    Settings.reset()
+    code = ExitCode.INTERNAL
+    try:
+        with warnings.catch_warnings():
+            # numpy's RuntimeWarnings (overflow in a product, an invalid tolerance) are not p105
+            # diagnostics: what they signal is checked where it matters (finite inputs, finite
+            # results) and reported as p105: lines; -vv shows them.
+            warnings.simplefilter("ignore", RuntimeWarning)
+            code = _run(argv)
+    finally:
+        code = finish_outputs(code)
+    return code
+
+
+def _run(argv: list[str] | None) -> int:
+    from p105cli.step.errors import StepError
     try:
         # Without standalone mode click returns a click.exceptions.Exit's code instead of raising it.
         rv = cli.main(args=argv, prog_name="p105", standalone_mode=False)
@@ -126,18 +147,29 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         diag("error", "out of memory (try --stream for very large files)")
         return ExitCode.INTERNAL
+    except OSError as err:
+        if not is_write_error(err):
+            return _internal_error(err)
+        # A device that refuses the data (a full disk): the environment's failure, not p105's.
+        # -o outputs name their path (contract.open_output); what is left is stdout.
+        diag("error", f"{err.filename or STDOUT_NAME}: cannot write: {err.strerror or err}")
+        return ExitCode.USAGE
     except Exception as err:  # noqa: BLE001 - the last line of defence of the contract
         from p105cli.schema.profiles import UnknownSchemaError
         if isinstance(err, UnknownSchemaError):  # the input's FILE_SCHEMA: the user's file, not a bug
             diag("error", str(err))
             return ExitCode.USAGE
-        diag("error", f"internal error (a bug in p105, please report it): {type(err).__name__}: {err}")
-        if Settings.verbosity > 0:
-            import traceback
-            traceback.print_exc()
-        else:
-            sys.stderr.write("p105: run again with -v for the traceback\n")
-        return ExitCode.INTERNAL
+        return _internal_error(err)
+
+
+def _internal_error(err: BaseException) -> int:
+    diag("error", f"internal error (a bug in p105, please report it): {type(err).__name__}: {err}")
+    if Settings.verbosity > 0:
+        import traceback
+        traceback.print_exception(err)
+    else:
+        sys.stderr.write("p105: run again with -v for the traceback\n")
+    return ExitCode.INTERNAL
 
 
 def run() -> None:

@@ -21,7 +21,7 @@ from enum import IntEnum
 
 import click
 
-from p105cli.fileio import AtomicWriteError, atomic_file
+from p105cli.fileio import DEVICE_ERRNOS, AtomicWriteError, PendingFile
 
 
 class ExitCode(IntEnum):
@@ -74,6 +74,11 @@ class Settings:
     """Process-wide CLI settings set by the group's options."""
 
     verbosity = 0  # -1 quiet, 0 normal, >=1 verbose
+    keep_partial = False  # --keep-partial: -o OUT is written even when the command fails
+
+    @classmethod
+    def reset(cls) -> None:
+        cls.verbosity, cls.keep_partial = 0, False
 
 
 def stderr_is_terminal() -> bool:
@@ -101,13 +106,31 @@ def _stdout_text() -> io.TextIOWrapper:
                             write_through=False, line_buffering=False)
 
 
+STDOUT_NAME = "<stdout>"
+
+#: -o outputs written completely and waiting for the command's exit status (see finish_outputs).
+_pending: list[PendingFile] = []
+
+
+def is_write_error(err: BaseException) -> bool:
+    """A write refused by the device (a full disk, a quota): exit 2 with the path, not a bug."""
+    return isinstance(err, OSError) and err.errno in DEVICE_ERRNOS
+
+
+def write_error(path: str, err: OSError) -> "OutputError":
+    return OutputError(f"{path}: cannot write: {err.strerror or err}")
+
+
 @contextlib.contextmanager
-def open_output(path: str | None, inputs: tuple = ()):
+def open_output(path: str | None, inputs: tuple = (), report: bool = False):
     """A text stream for the command's data: stdout, or ``path`` written atomically.
 
-    The file appears only when everything was written; on any failure the
-    temporary file is removed and an existing file is left as it was. An
-    output that is one of the inputs is refused: input is never modified.
+    ``path`` is replaced only when the command ends with exit status 0 (see
+    :func:`finish_outputs`; with --keep-partial, whatever the status): a
+    failed run leaves an existing file as it was and writes no new one, so a
+    make rule that wants OUT runs again. A ``report`` (validate's) is the
+    verdict itself and is written whenever it is complete. An output that is
+    one of the inputs is refused: input is never modified.
     """
     if path in (None, "-"):
         out = _stdout_text()
@@ -116,6 +139,10 @@ def open_output(path: str | None, inputs: tuple = ()):
             out.flush()
         except BrokenPipeError:
             raise PipeClosed() from None
+        except OSError as err:
+            if is_write_error(err):
+                raise write_error(STDOUT_NAME, err) from None
+            raise
         finally:
             try:
                 out.detach()
@@ -135,10 +162,58 @@ def open_output(path: str | None, inputs: tuple = ()):
                 and os.path.samefile(src, path):
             raise click.UsageError(f"output {path} is the input {src}: p105 never overwrites its input")
     try:
-        with atomic_file(path) as out:
-            yield out
+        pending = PendingFile(path)
     except AtomicWriteError as err:
         raise OutputError(f"{path}: cannot write: {err.strerror or err}") from None
+    try:
+        yield pending.file
+        pending.finish()
+    except BaseException as err:
+        if is_write_error(err):
+            pending.discard()
+            raise write_error(path, err) from None
+        if Settings.keep_partial and _finished(pending):
+            _pending.append(pending)  # what was written before the failure, as asked
+        else:
+            pending.discard()
+        raise
+    if report:
+        _commit(pending)
+    else:
+        _pending.append(pending)
+
+
+def _finished(pending: PendingFile) -> bool:
+    try:
+        pending.finish()
+        return True
+    except OSError:
+        return False
+
+
+def _commit(pending: PendingFile) -> None:
+    try:
+        pending.commit()
+    except OSError as err:
+        raise OutputError(f"{pending.path}: cannot write: {err.strerror or err}") from None
+
+
+def finish_outputs(code: int) -> int:
+    """Rename the command's -o outputs into place when it succeeded (or --keep-partial was
+    given), remove them otherwise; the exit status after that (2 if one cannot be renamed)."""
+    keep = code == ExitCode.OK or Settings.keep_partial
+    while _pending:
+        pending = _pending.pop(0)
+        if not keep:
+            pending.discard()
+            continue
+        try:
+            _commit(pending)
+        except OutputError as err:
+            err.show()
+            code = ExitCode.USAGE
+            keep = False  # one output missing: the others are not left half a result either
+    return code
 
 
 def copy_to_stdout(data: bytes) -> None:
@@ -155,6 +230,10 @@ def copy_to_stdout(data: bytes) -> None:
             view = view[os.write(fd, view[:1 << 20]):]
     except BrokenPipeError:
         raise PipeClosed() from None
+    except OSError as err:
+        if is_write_error(err):
+            raise write_error(STDOUT_NAME, err) from None
+        raise
 
 
 class Progress:

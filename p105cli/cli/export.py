@@ -33,6 +33,38 @@ def _convert(doc, schema: str, occt_compat: bool):
     return out
 
 
+#: How many of the converted file's errors are listed before "and N more".
+GATE_SHOWN = 10
+
+
+def _gate(doc, schema: str) -> bool:
+    """True when the converted model passes validate; its errors on stderr otherwise.
+
+    The contract of --schema: never write, with exit 0, a file that validate
+    rejects. A conversion carries over what it does not touch, the source's
+    own defects too (a dangling reference, a missing attribute), and those
+    are what this stops; the ids are the converted file's."""
+    import io
+
+    from p105cli.rules.validate import validate_document
+    from p105cli.step import read_step, write_step
+
+    text = io.StringIO()
+    write_step(doc, text)
+    converted = read_step(text.getvalue(), doc.source)
+    result = validate_document(converted, doc.source, "p105" if schema == "p105" else None)
+    errors = [d for d in result.diagnostics if d.severity == "error"]
+    for d in errors[:GATE_SHOWN]:
+        where = f"#{d.entity} ({d.entity_type.lower()}) of the result" if d.entity is not None else "the result"
+        diag("error", f"{doc.source}: converted to {schema}, {where} breaks {d.rule}: {d.message}")
+    if len(errors) > GATE_SHOWN:
+        diag("error", f"{doc.source}: converted to {schema}, the result breaks {len(errors) - GATE_SHOWN} more rules")
+    if errors:
+        diag("error", f"{doc.source}: not converted: the {schema} result would not pass p105 validate "
+                      f"({len(errors)} {'error' if len(errors) == 1 else 'errors'})")
+    return not errors
+
+
 @click.command(epilog=READ_LENIENTLY_TEXT + EXIT_STATUS_TEXT)
 @to_option(["p21", "json"], "p21", help="Output format: Part 21 text, or the p105/1 JSON model.")
 @output_schema(["ap214", "p105", "ap242"],
@@ -67,7 +99,10 @@ def export(to, schema, occt_compat, input, output, stream):
     contexts explicitly, orientations as rotation_about_direction, and
     leaves actuation, loops and sequences out (each reported), so the file
     loads there with an empty check list. Without it the output is the
-    standard form, which p105 validate passes.
+    standard form, which p105 validate passes: a conversion whose result
+    validate would reject (the source's own errors carried over, what the
+    target cannot hold) lists the result's errors and exits 1 without
+    writing it.
 
     With --schema a file read with departures from its schema (warned as
     graph and solve warn them) is repaired: the converted mechanism is
@@ -81,6 +116,7 @@ def export(to, schema, occt_compat, input, output, stream):
     if occt_compat and schema != "ap242":
         raise click.UsageError("--occt-compat applies to --schema ap242 only")
     doc = load_document(input)
+    passes = True
     if schema is not None:
         from p105cli.part105.emit import NotWritableError
         report_warnings(doc)
@@ -90,10 +126,15 @@ def export(to, schema, occt_compat, input, output, stream):
             # repaired to conform (convert.RepairError): no output, not a bad input
             diag("error", f"{doc.source}: {err}")
             return ExitCode.FINDINGS
-    with open_output(output, (input,)) as out:
-        if to == "p21":
-            emit_p21(doc, out)
-        else:
-            emit_json(doc, out, stream)
+        # (--occt-compat writes Open CASCADE's dialect on purpose: not validate's to judge)
+        passes = occt_compat or _gate(doc, schema)
+    if passes or output not in (None, "-"):  # a failed -o is written only with --keep-partial
+        with open_output(output, (input,)) as out:
+            if to == "p21":
+                emit_p21(doc, out)
+            else:
+                emit_json(doc, out, stream)
     if schema is None:
         report_warnings(doc)
+    if not passes:
+        raise click.exceptions.Exit(ExitCode.FINDINGS)

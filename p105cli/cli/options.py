@@ -36,8 +36,40 @@ def file_option(flag: str, dest: str, help: str):
 # ---------------------------------------------------------------- output
 
 
-def output_to(help: str = "Write to OUT atomically (a temporary file renamed into place) instead of stdout."):
-    return click.option("-o", "--output", metavar="OUT", default=None, help=help)
+KEEP_PARTIAL_HELP = ("With -o: write OUT even when the command fails (exit status not 0), with what "
+                     "was computed before the failure; by default a failed run leaves OUT as it was.")
+
+
+def _partial_needs_output(ctx) -> None:
+    # Both callbacks run whatever the order on the command line; the second one decides.
+    if "p105.output" in ctx.meta and "p105.keep_partial" in ctx.meta:
+        if ctx.meta["p105.keep_partial"] and ctx.meta["p105.output"] in (None, "-"):
+            raise click.UsageError("--keep-partial applies to -o OUT (stdout is written as it goes)")
+
+
+def _note_output(ctx, param, value):
+    ctx.meta["p105.output"] = value
+    _partial_needs_output(ctx)
+    return value
+
+
+def _keep_partial(ctx, param, value):
+    from .contract import Settings
+    ctx.meta["p105.keep_partial"] = value
+    _partial_needs_output(ctx)
+    Settings.keep_partial = value
+
+
+def output_to(help: str = "Write to OUT atomically (a temporary file renamed into place) instead of stdout.",
+              partial: bool = True):
+    """``-o OUT``, and with ``partial`` the ``--keep-partial`` that goes with it (see
+    contract.open_output: OUT is replaced only when the command succeeds)."""
+    out = click.option("-o", "--output", metavar="OUT", default=None, help=help, callback=_note_output)
+    if not partial:
+        return out
+    keep = click.option("--keep-partial", is_flag=True, expose_value=False, callback=_keep_partial,
+                        help=KEEP_PARTIAL_HELP)
+    return lambda f: out(keep(f))
 
 
 output_option = output_to()

@@ -195,6 +195,7 @@ def _start(o, doc, mech, prog):
             raise click.UsageError(f"--branch {o.branch}: the model's program is a prescribed path (inverse "
                                    "analysis): the assembly branch is chosen in forward analysis")
         motion = _motion(o, mech, prog)
+        _check_driven_values(o, mech, pl, motion.driven)
         # Model output needs every configuration at once; the tables stream block by block.
         blocks = analyse_motion(mech, motion, tol=o.tol, max_iter=o.max_iter, pl=pl,
                                 block=None if o.to == "model" else 4096, branch=o.want)
@@ -235,6 +236,39 @@ def _check_pair_parameters(o, mech, pl):
             where = f"#{iid}: " if iid is not None else ""
             raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {where}mechanism {mech.name!r}: "
                              f"pair {name!r}: {err}") from None
+
+
+def _check_driven_values(o, mech, pl, driven, chunk: int = 65536):
+    """Driven values a pair's motion refuses (a locked freedom of a low order pair driven away
+    from 0) are an input error naming the pair, as for its parameters, before the solver meets
+    them (fuzz: --set B=0.5,0.1,0.2 on such a pair was exit 3)."""
+    import numpy as np
+    if not driven:
+        return
+    q0 = np.asarray(mech.initial_vector(), dtype=float)
+    for k, kind in enumerate(pl.types):
+        name, sl = pl.pair_names[k], pl.slices[k]
+        cols = {key: v for key, v in driven.items() if (key[0] if isinstance(key, tuple) else key) == name}
+        if not cols:
+            continue
+        n = max(len(np.atleast_1d(v)) for v in cols.values())
+        for start in range(0, n, chunk):
+            q = np.tile(q0[sl], (min(chunk, n - start), 1))
+            for key, v in cols.items():
+                v = np.broadcast_to(np.asarray(v, dtype=float), (n,) + np.shape(v)[1:])[start:start + len(q)]
+                if isinstance(key, tuple):
+                    q[:, key[1]] = v
+                elif v.ndim == 2:
+                    q[:, :] = v
+                else:
+                    q[:, 0] = v
+            try:
+                kind.motion(q, **pl.params[k])
+            except (ValueError, NotImplementedError) as err:
+                iid = (getattr(mech.pair(name), "ids", None) or {}).get("pair")
+                where = f"#{iid}: " if iid is not None else ""
+                raise InputError(f"{o.model if not is_stdin(o.model) else STDIN}: {where}mechanism {mech.name!r}: "
+                                 f"pair {name!r}: driven values: {err}") from None
 
 
 def _motion(o, mech, prog):

@@ -34,7 +34,9 @@ def _check_one(path: str, schema: str | None, timings: bool):
         diag = Diagnostic("P21-SYNTAX", "error", err.message, source, err.line or None, err.column or None)
     except StepError as err:
         entity = getattr(err, "instance_id", None)
-        diag = Diagnostic("P21-STRUCTURE", "error", err.message, source, entity=entity)
+        pointer = getattr(err, "pointer", "")  # a JSON model's place (/data/0), as the other commands say it
+        message = f"{pointer}: {err.message}" if pointer.startswith("/") else err.message
+        diag = Diagnostic("P21-STRUCTURE", "error", message, source, entity=entity)
     except UnknownSchemaError as err:
         diag = Diagnostic("P21-SCHEMA", "error", str(err), source)
     return RunResult.make(source, [diag], readable=False), None
@@ -52,7 +54,7 @@ def _check_one(path: str, schema: str | None, timings: bool):
 @click.option("--ignore", multiple=True, metavar="PATTERNS",
               help="Do not report rules matching these globs, e.g. 'KIN-UNREACHABLE'.")
 @input_schema(SCHEMA_HELP_SHORT)
-@output_to("Write the report to OUT atomically instead of stdout.")
+@output_to("Write the report to OUT atomically instead of stdout (also when it has findings).", partial=False)
 @click.option("--pass", "pass_through", is_flag=True,
               help="If the input passes, copy it unchanged to stdout (the report goes to stderr or -o).")
 @click.option("--list-rules", is_flag=True,
@@ -141,5 +143,5 @@ def _report(fmt, results, output, inputs, pass_through):
     if pass_through and output is None:
         write_report("text" if fmt == "auto" else fmt, results, sys.stderr)
         return
-    with open_output(output, inputs) as out:
+    with open_output(output, inputs, report=True) as out:  # findings are the verdict: written
         write_report(fmt, results, out)

@@ -16,15 +16,23 @@ from __future__ import annotations
 
 import csv
 import json
+import math
+import re
 
 import numpy as np
 
 __all__ = ["Table", "Tally", "write_blocks"]
 
 
-def _f(x) -> float:
-    """A plain float for JSON (no -0.0 noise from round-off, no numpy types)."""
+_NONFINITE_CELL = re.compile(r"(?<=,)-?(?:inf|nan)(?=,|$)")
+
+
+def _f(x) -> float | None:
+    """A plain float for JSON (no -0.0 noise from round-off, no numpy types); null for a value
+    that is not finite (an error that diverged): JSON has no NaN or Infinity."""
     v = float(x)
+    if not math.isfinite(v):
+        return None
     return 0.0 if v == 0.0 else v
 
 
@@ -120,7 +128,10 @@ class Table:
             status = result.status
         write = self.out.write
         for i, ti, st, a, it, b in zip(index, tt, status, left.tolist(), iters, right.tolist()):
-            write(f"{i},{ti},{st},{','.join(map(repr, a))},{it},{','.join(map(repr, b))}\n")
+            row = f"{i},{ti},{st},{','.join(map(repr, a))},{it},{','.join(map(repr, b))}"
+            if "n" in row:  # inf or nan (a diverged error): an empty cell, as for a missing value
+                row = _NONFINITE_CELL.sub("", row)
+            write(row + "\n")
 
 
 class Tally:

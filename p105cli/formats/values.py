@@ -269,6 +269,12 @@ def _columns(values, sets, sweeps, length, angle, is_angle):
 def _driven_key(mech, key, v, is_angle):
     """The key a driven column has for the solver (``name[0]`` of a one-value pair is ``name``);
     a FormatError for an angle beyond :data:`MAX_TURNS` or a multi-valued pair driven as one."""
+    from p105cli.part105.model_file import MAX_MAGNITUDE
+    # the bound of every number a mechanism is read with (fuzz: a slider driven to 1e300 overflowed
+    # the contact point of a cam in the loop closure, exit 3)
+    if np.size(v) and not float(np.max(np.abs(v))) <= MAX_MAGNITUDE:
+        raise FormatError(f"{key_label(key)}: {float(np.max(np.abs(v))):.3g} is beyond the magnitudes p105 "
+                          f"computes with ({MAX_MAGNITUDE:g})")
     # an angle of a million turns has no digits left for its position within the turn
     if is_angle(key) and np.size(v) and float(np.max(np.abs(v))) > MAX_TURNS * 2.0 * math.pi:
         raise FormatError(f"{key_label(key)}: an angle of {float(np.max(np.abs(v))):.3g} rad is more than "

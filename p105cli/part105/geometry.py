@@ -38,6 +38,7 @@ from ..schema.values import number
 from ..step.values import ref_id
 from ..kinematics import geometry as G
 from ..kinematics.placements import axis2_placement_3d
+from .model_file import MAX_MAGNITUDE
 
 __all__ = ["curve_from_instance", "surface_from_instance", "curve_records", "surface_records",
            "CURVE_TYPES", "SURFACE_TYPES"]
@@ -56,6 +57,9 @@ def _num(v, inst, attr) -> float:
     x = number(v)  # typed parameters too, e.g. LENGTH_MEASURE(1.)
     if x is None:
         raise ModelError(f"#{inst.id} ({_kind(inst)}): {attr} is not a number ({v!r})", f"#{inst.id}")
+    if not abs(x) <= MAX_MAGNITUDE:  # the same bound as every other number a mechanism is read with
+        raise ModelError(f"#{inst.id} ({_kind(inst)}): {attr} holds {x!r}, beyond the magnitudes p105 computes "
+                         f"with ({MAX_MAGNITUDE:g})", f"#{inst.id}")
     return x
 
 

@@ -154,9 +154,10 @@ def read_paths(doc, profile: str | None = None) -> MotionReadResult:
                     op = _ref(rel.get("transformation_operator"))
                     item = _ref(pop.instance(op).get("transform_item_1")) if op in pop else None
                     if item in pop:
-                        frame = pop.instance(item).get("name") or f"#{item}"
+                        frame = mf.string(item, "name") or f"#{item}"
                     break
-        name = inst.get("name") or (holder.get("name") if holder is not None else "") or f"#{pid}"
+        # (names through mf.string: a name that is no string, a list, is no name)
+        name = mf.string(pid, "name") or (mf.string(holder.id, "name") if holder is not None else "") or f"#{pid}"
         try:
             out.paths.append(KinematicPath(name, segments, link=link, frame=frame, role=role, id=pid,
                                            holder_id=holder.id if holder is not None else None))
@@ -211,8 +212,8 @@ def read_configuration_sequences(doc, profile: str | None = None):
                 state = at(gid, "state")
                 t = mf.number(gid, "t_parameter")
                 nodes[t] = ConfigurationNode(t, values.values(mf.refs(state.id, "items")),
-                                             _interpolation(seg), state.get("name") or "", state.id)
-            name = seq.get("name") or f"#{sid}"
+                                             _interpolation(seg), mf.string(state.id, "name"), state.id)
+            name = mf.string(sid, "name") or f"#{sid}"
             closed = bool(nodes) and list(nodes.values())[-1].interpolation != "discontinuous"
         else:  # 1996: a set of configuration_interpolation(previous, next, interpolation)
             laws = {}

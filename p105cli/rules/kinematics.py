@@ -825,8 +825,9 @@ def _check_axis2(k: _Kin, p) -> None:
     try:
         build_axes(vecs["axis"], vecs["ref_direction"])
     except ValueError:
-        k.add(PLACEMENT, ERROR, f"axis {_vec(vecs['axis'])} and ref_direction "
-              f"{_vec(vecs['ref_direction'])} are parallel: the placement has no x axis "
+        # (an unset axis is z, an unset ref_direction x: ISO 10303-42's defaults)
+        k.add(PLACEMENT, ERROR, f"axis {_vec(vecs['axis'] or (0.0, 0.0, 1.0))} and ref_direction "
+              f"{_vec(vecs['ref_direction'] or (1.0, 0.0, 0.0))} are parallel: the placement has no x axis "
               "(ISO 10303-42 axis2_placement_3d WR4)", p, "ref_direction")
         return
     if vecs["axis"] is not None and vecs["ref_direction"] is not None:
