@@ -182,7 +182,7 @@ def test_a_configuration_with_a_number_among_its_pair_values_is_left_out_of_the_
     else:  # ap214 to ap214 keeps the file's own sequence as it is, the number too: refused
         assert r.returncode == 1 and r.stdout == b""
         assert (f"{path}: converted to ap214, #217 (configuration_definition) of the result breaks SCH-TYPE: "
-                "pair_values: pair_values: [0]: expected a reference to a pair_value, found the integer 7") in err
+                "pair_values: [0]: expected a reference to a pair_value, found the integer 7") in err
         assert err.splitlines()[-1] == (f"p105: error: {path}: not converted: the ap214 result would not pass "
                                         "p105 validate (1 error)")
 
@@ -404,11 +404,18 @@ def test_a_short_fixed_seed_fuzz_run_of_every_command_ends_in_no_crash(tmp_path)
 
 @pytest.mark.skipif(not (SHARED / "external" / "defects" / "four_bar_low_order_pair.stp").is_file(),
                     reason="no shared files")
-@pytest.mark.parametrize("drive", [["--set", "B=0.5,0.1,0.2"], ["--set", "B[3]=0.5"], ["--sweep", "B[0]=0:1:3"]],
+@pytest.mark.parametrize("drive", [["--set", "B=0.5,0.1,0.2,0,0,0"], ["--set", "B[1]=0.5"], ["--sweep", "B[4]=0:1:3"]],
                          ids=" ".join)
-def test_a_locked_freedom_driven_away_from_0_is_named(p105, drive):
-    # make fuzz (seed 20261126): ValueError from the low order pair's motion (exit 3)
-    path = SHARED / "external" / "defects" / "four_bar_low_order_pair.stp"
+def test_a_locked_freedom_driven_away_from_0_is_named(p105, tmp_path, drive):
+    # make fuzz (seed 20261126): ValueError from the low order pair's motion (exit 3). The
+    # pin B made a generic pin-in-slot (t_x and r_z free: no named pair has these flags, so
+    # it keeps the generic pair's six values, four of them locked)
+    source = (SHARED / "external" / "defects" / "four_bar_low_order_pair.stp").read_text()
+    pin = ".F.,.F.,.F.,.F.,.F.,.T.);"
+    line = next(ln for ln in source.splitlines() if ln.startswith("#183=LOW_ORDER_KINEMATIC_PAIR("))
+    assert line.endswith(pin)
+    path = tmp_path / "pin_in_slot.stp"
+    path.write_text(source.replace(line, line[:-len(pin)] + ".T.,.F.,.F.,.F.,.F.,.T.);"))
     r = p105("solve", *drive, "--no-timings", "--to", "jsonl", path)
     assert r.returncode == 2 and r.stdout == b""
     last = _no_crash(r).splitlines()[-1]
