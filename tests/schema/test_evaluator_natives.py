@@ -141,6 +141,16 @@ def test_aggregate_operators_on_instances_count_occurrences_by_identity():
     assert list(run("p + q", p=Agg("set", [a, b]), q=b)) == [a, b]
     # with a simple value among them the value comparison still applies
     assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
+    # strings (TYPEOF against a long form's list of type names) match by value, occurrences counted
+    assert list(run("p * q", p=Agg("bag", ["x", "y", "y", "z"]), q=Agg("bag", ["y", "z", "y", "y"]))) \
+        == ["y", "y", "z"]
+    assert list(run("p * q", p=Agg("set", ["z", "y", "x"]), q=Agg("set", ["x", "z"]))) == ["z", "x"]
+    assert list(run("p - q", p=Agg("bag", ["x", "y", "y", "z", "y"]), q=Agg("bag", ["y", "y"]))) \
+        == ["x", "z", "y"]
+    assert list(run("p - q", p=Agg("bag", ["x", "y"]), q="y")) == ["x"]
+    assert list(run("p * q", p=Agg("set", ["a", "B"]), q=Agg("set", ["b", "A"]))) == []  # case counts
+    assert list(run("p * q", p=Agg("set", ["a", 1]), q=Agg("set", [1, "a"]))) == ["a", 1]
+    assert run("SIZEOF(['P.A', 'P.B', 'P.C'] * TYPEOF(p))", p=a) == 0
 
 
 def _compatible_dimension(pop, **kw):
