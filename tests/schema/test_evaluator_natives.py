@@ -286,3 +286,42 @@ END-ISO-10303-21;
     got = [fast.where_rule(pop.instance(i), "axis2_placement_3d", "wr4") for i in (6, 7, 8)]
     assert got == [plain.where_rule(pop.instance(i), "axis2_placement_3d", "wr4") for i in (6, 7, 8)]
     assert got == [True, False, None]
+
+
+@pytest.mark.parametrize("profile", ["ap242", "ap214"])
+def test_native_dimension_of_is_the_express_function(profile):
+    header = AP242_HEADER if profile == "ap242" else AP242_HEADER.replace(
+        "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }",
+        "AUTOMOTIVE_DESIGN { 1 0 10303 214 3 1 1 1 }")
+    text = header + """DATA;
+#1=CARTESIAN_POINT('',(0.,0.,0.));
+#2=CARTESIAN_POINT('',(1.,2.));
+#3=CARTESIAN_POINT('',(5.));
+#4=DIRECTION('',(0.,0.,1.));
+#5=DIRECTION('',(0.,1.));
+#6=DIRECTION('',(0.,0.,0.));
+#7=VECTOR('',#4,2.);
+#8=AXIS2_PLACEMENT_3D('',#1,#4,$);
+#9=(GEOMETRIC_REPRESENTATION_CONTEXT(2)REPRESENTATION_CONTEXT('c','t'));
+#10=REPRESENTATION('r',(#8,#11),#9);
+#11=AXIS2_PLACEMENT_2D('',#2,#5);
+#12=CARTESIAN_POINT('',$);
+#13=DIRECTION('',(0.,0.,1.,0.));
+ENDSEC;
+END-ISO-10303-21;
+"""
+    pop = _pop(text)
+    fast, plain = Evaluator(pop, memoize=False), Evaluator(pop, memoize=False, natives=False)
+    f = pop.schema.functions["dimension_of"]
+    natively = []
+    for iid in range(1, 14):
+        if iid in (9, 10):
+            continue
+        inst = pop.instance(iid)
+        got = fast.call("dimension_of", inst)
+        assert _value_form(got) == _value_form(plain.call("dimension_of", inst)), iid
+        if fast._dimension_of(f, [inst]) is not Missing:
+            natively.append(iid)
+    assert natively == [1, 2, 3, 4, 5, 6, 13]
+    assert [_value_form(fast.call("dimension_of", pop.instance(i)))[2] for i in (1, 2, 3, 8, 11)] \
+        == [("int", "3"), ("int", "2"), ("int", "1"), ("int", "2"), ("int", "2")]

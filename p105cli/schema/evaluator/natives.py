@@ -31,6 +31,10 @@ the value is the one the body returns. Only two population directions of 2 or 3 
 ratios take this path; a zero direction (``normalise`` gives ``?``), an overflowing sum of
 squares or anything else is left to the body.
 
+``dimension_of(item)`` (the derived ``dim`` of every geometric item, read by the placement
+rules) of a plain cartesian point or direction is the number of its coordinates or ratios,
+as the body's first two branches count them; any other item goes through the body.
+
 A native applies only to a FUNCTION of that name with the expected parameters; any other
 argument (``?``, an in-memory entity value) is left to the interpreter.
 """
@@ -45,6 +49,8 @@ from .scope import _MISSING
 from .values import _IND, Agg, _plain
 
 _DIRECTION = frozenset({"direction"})
+#: leaf types whose dimension_of is SIZEOF of an explicit list, and that list
+_COUNTED = {frozenset({"cartesian_point"}): "coordinates", _DIRECTION: "direction_ratios"}
 
 
 class _Cycle(Exception):
@@ -156,6 +162,21 @@ class Natives:
             result = self._combine(dummy, self._construct("vector", [args[0], 0.0], node), node)
         return self._coerce(result, f.return_type)
 
+    def _dimension_of(self, f, args):
+        x = args[0]
+        if type(x) is not Instance or x.pop is not self.pop:
+            return _MISSING
+        attribute = _COUNTED.get(x.leaf_types)
+        if attribute is None:
+            return _MISSING
+        raw = x.get(attribute)
+        if type(raw) is not list:
+            return _MISSING
+        declared = [lv.type for lv in f.locals if lv.name == "dim"]
+        if len(declared) != 1:
+            return _MISSING
+        return self._coerce(self._coerce(len(raw), declared[0]), f.return_type)
+
     def _direction_ratios(self, x):
         """The ratios of a population direction (a plain one, whose ``dim`` is their count)
         when they are 2 or 3 finite reals, else None."""
@@ -227,4 +248,5 @@ _NATIVES = {
     "using_representations": (Natives._using_representations, 1),
     "check_geometric_dimension": (Natives._check_geometric_dimension, 3),
     "cross_product": (Natives._cross_product, 2),
+    "dimension_of": (Natives._dimension_of, 1),
 }
