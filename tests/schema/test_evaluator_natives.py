@@ -325,3 +325,31 @@ END-ISO-10303-21;
     assert natively == [1, 2, 3, 4, 5, 6, 13]
     assert [_value_form(fast.call("dimension_of", pop.instance(i)))[2] for i in (1, 2, 3, 8, 11)] \
         == [("int", "3"), ("int", "2"), ("int", "1"), ("int", "2"), ("int", "2")]
+
+
+@pytest.mark.parametrize("edit", [
+    None,
+    ("'crank-coupler pin',#149,#153,#134,", "'crank-coupler pin',#149,#153,#133,"),  # a joint twice
+    ("'coupler-rocker pin',#157,#161,#135,", "'coupler-rocker pin',#157,#161,$,"),  # no joint: ?
+    ("#190=MECHANISM_REPRESENTATION('four_bar',(#186,#187,#188,#189)",
+     "#190=MECHANISM_REPRESENTATION('four_bar',(#189,#186,#189,#188)"),  # order, a pair twice
+])
+def test_native_collect_joints_is_the_express_function(edit):
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    if edit:
+        assert edit[0] in text
+        text = text.replace(edit[0], edit[1])
+    pop = _pop(text)
+    fast, plain = Evaluator(pop, memoize=False), Evaluator(pop, memoize=False, natives=False)
+    mech = pop.instance(190)
+    items = fast.attribute(mech, "items")
+    got = fast.call("collect_joints", items)
+    assert _value_form(got) == _value_form(plain.call("collect_joints", plain.attribute(mech, "items")))
+    native = fast._collect_joints(pop.schema.functions["collect_joints"], [items])
+    assert (native is Missing) == (edit is not None and "$" in edit[1])
+    expected = {None: [133, 134, 135, 136], 1: [133, 135, 136], 3: [136, 133, 135]}
+    if native is not Missing:
+        index = None if edit is None else (1 if "#133," in edit[1] else 3)
+        assert [j.id for j in got] == expected[index]
+    assert fast.where_rule(mech, "mechanism_representation", "wr1") == \
+        plain.where_rule(mech, "mechanism_representation", "wr1")

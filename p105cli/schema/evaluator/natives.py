@@ -35,6 +35,12 @@ squares or anything else is left to the body.
 rules) of a plain cartesian point or direction is the number of its coordinates or ratios,
 as the body's first two branches count them; any other item goes through the body.
 
+``collect_joints(items)`` (``mechanism_representation.wr1``) adds the joint of each pair to
+a SET in a REPEAT; interpreted, every ``result := result + joint`` copies and re-checks the
+whole set, quadratic in the pairs. Here the distinct joints in first-occurrence order (SET +
+element keeps the set when the element is in it, instance equality being identity); a
+joint that is not a population instance (``?``) is left to the body.
+
 A native applies only to a FUNCTION of that name with the expected parameters; any other
 argument (``?``, an in-memory entity value) is left to the interpreter.
 """
@@ -162,6 +168,22 @@ class Natives:
             result = self._combine(dummy, self._construct("vector", [args[0], 0.0], node), node)
         return self._coerce(result, f.return_type)
 
+    def _collect_joints(self, f, args):
+        items = _plain(args[0])
+        declared = [lv.type for lv in f.locals if lv.name == "result"]
+        if type(items) is not Agg or len(declared) != 1:
+            return _MISSING
+        joints: list = []
+        seen: set = set()
+        for item in items:
+            joint = self._attr(self._attr(item, "transformation_operator", None, None), "joint", None, None)
+            if type(joint) is not Instance:
+                return _MISSING
+            if id(joint) not in seen:
+                seen.add(id(joint))
+                joints.append(joint)
+        return self._coerce(self._coerce(Agg("set", joints), declared[0]), f.return_type)
+
     def _dimension_of(self, f, args):
         x = args[0]
         if type(x) is not Instance or x.pop is not self.pop:
@@ -249,4 +271,5 @@ _NATIVES = {
     "check_geometric_dimension": (Natives._check_geometric_dimension, 3),
     "cross_product": (Natives._cross_product, 2),
     "dimension_of": (Natives._dimension_of, 1),
+    "collect_joints": (Natives._collect_joints, 1),
 }
