@@ -134,17 +134,19 @@ WHERE_THE_TIME_GOES = """## Where the time goes
   root per occurrence, pairwise set operations) are gone. The geometry functions the placement
   rules call run in Python (`schema/evaluator/natives.py`, each proven equal to the EXPRESS body
   on generated inputs): `cross_product` (`axis2_placement_3d.wr4`, 0.5 ms down to 0.12 ms per
-  placement) and `dimension_of` of points and directions (the derived `dim` of `wr1`-`wr3`);
+  placement), `dimension_of` of points and directions (the derived `dim` of `wr1`-`wr3`) and
+  `collect_joints` (`mechanism_representation.wr1`: the interpreter copied and re-checked the
+  whole SET for every pair, quadratic: 0.09 s at 1,000 pairs, 0.7 s at 3,000);
   intersections of string lists with TYPEOF (`ap242_subtype_mandatory_shape_representation`, a
   1,200-name list against every shape representation) match by value with counts instead of
   pairwise (0.75 s of a 1,000-pair chain before). Together: the 1,000-pair chain 6.65 s down to
-  5.6 s CPU, 3,000 pairs 24.8 s to 16.4 s, 10,000 pairs 93.1 s to 73.7 s (n^1.15 to n^1.12).
+  5.3 s CPU, 3,000 pairs 24.8 s to 17.2 s, 10,000 pairs 93.1 s to 61.4 s (n^1.15 to n^1.07).
   What is left: at 1,000 pairs the rules take about 3.2 s (the interpreter's walk of some 57
   WHERE rule bodies per pair, 10 to 150 microseconds each, and the global rules over the
   extents), reading, conformance and the kinematics checks the rest. The 10,000-pair target
-  needs about a tenth of today's 7.4 ms per pair: compiling rule bodies to Python closures
-  (not done) and cheaper reading and conformance checks outside the evaluator; the slight
-  super-linear growth is not located yet. The 20 MB assembly gains less: measured back to back on
+  needs a sixth of today's 6.1 ms per pair: compiling rule bodies to Python closures (not
+  done) and cheaper reading and conformance checks outside the evaluator; the slight
+  super-linear growth left is not located yet. The 20 MB assembly gains less: measured back to back on
   the same loaded machine, 22.5 s CPU before these changes and 19.4 s after (the table's
   21.3 s is from a busier moment). Every finding is unchanged: the golden outputs byte for
   byte, and the JSON reports of 80 files of `../shared/external/` and the corpus compared
