@@ -10,6 +10,7 @@ from conftest import EXAMPLES, SHARED
 from p105cli.schema.evaluator import Evaluator
 from p105cli.schema.evaluator.compiled import compiled_for
 from p105cli.schema.population import Population
+from p105cli.schema.evaluator.scope import _MISSING as Missing
 from p105cli.schema.profiles import get_profile
 from p105cli.step import read_step
 
@@ -140,6 +141,16 @@ def test_aggregate_operators_on_instances_count_occurrences_by_identity():
     assert list(run("p + q", p=Agg("set", [a, b]), q=b)) == [a, b]
     # with a simple value among them the value comparison still applies
     assert list(run("p - q", p=Agg("bag", [a, 1, 2.0]), q=Agg("bag", [2, a]))) == [1]
+    # strings (TYPEOF against a long form's list of type names) match by value, occurrences counted
+    assert list(run("p * q", p=Agg("bag", ["x", "y", "y", "z"]), q=Agg("bag", ["y", "z", "y", "y"]))) \
+        == ["y", "y", "z"]
+    assert list(run("p * q", p=Agg("set", ["z", "y", "x"]), q=Agg("set", ["x", "z"]))) == ["z", "x"]
+    assert list(run("p - q", p=Agg("bag", ["x", "y", "y", "z", "y"]), q=Agg("bag", ["y", "y"]))) \
+        == ["x", "z", "y"]
+    assert list(run("p - q", p=Agg("bag", ["x", "y"]), q="y")) == ["x"]
+    assert list(run("p * q", p=Agg("set", ["a", "B"]), q=Agg("set", ["b", "A"]))) == []  # case counts
+    assert list(run("p * q", p=Agg("set", ["a", 1]), q=Agg("set", [1, "a"]))) == ["a", 1]
+    assert run("SIZEOF(['P.A', 'P.B', 'P.C'] * TYPEOF(p))", p=a) == 0
 
 
 def _compatible_dimension(pop, **kw):
@@ -185,3 +196,160 @@ def test_peek_reads_an_attribute_as_get_does_without_keeping_the_record():
             assert pop.peek(iid, attr) == expected
             if attr == "name":
                 assert iid not in pop._instances  # nothing kept
+
+
+def _value_form(v):
+    """An evaluator value spelled out completely (kinds, bounds, defined types, the parts and
+    types of entity values, instance ids), so that two values compare equal only when every
+    detail is the same; floats by their exact repr (0.0 and -0.0 differ)."""
+    from p105cli.schema.evaluator import Agg, EntityValue, TypedValue
+    from p105cli.schema.instance import Instance
+    if type(v) is Agg:
+        return ("agg", v.kind, v.lo, v.dtypes, v.bounds, [_value_form(x) for x in v])
+    if type(v) is EntityValue:
+        return ("entity", sorted(v.types), sorted(v.leaf_types),
+                [(k, [(n, _value_form(x)) for n, x in a.items()]) for k, a in v.parts.items()])
+    if type(v) is TypedValue:
+        return ("typed", v.dtypes, _value_form(v.value))
+    if type(v) is Instance:
+        return ("instance", v.id)
+    if type(v) is float:
+        return ("float", repr(v))
+    return (type(v).__name__, repr(v))
+
+
+def _directions():
+    """Direction ratios for cross_product: random 3D ones, parallel and anti-parallel pairs,
+    zero vectors, 2D ones, tiny and huge components (underflow and overflow of the sum of
+    squares), negative zeros and integers."""
+    import random
+    rng = random.Random(105)
+    out = [(0., 0., 1.), (1., 0., 0.), (0., 1., 0.), (0., 0., -1.), (2., 0., 0.), (0., 0., 0.),
+           (-0., 0., 1.), (1., 0.), (0., 1.), (0., 0.), (1e-200, 0., 0.), (1e200, 1e200, 0.),
+           (1e-160, 1e-160, 1e-160), (3, 4, 0), (0.6, 0.8, 0.), (-0.6, -0.8, -0.)]
+    for _ in range(40):
+        out.append(tuple(rng.choice((rng.uniform(-5, 5), 0.0, rng.randint(-2, 2) * 1.0))
+                         for _ in range(3)))
+    out.append(tuple(2.5 * x for x in out[-1]))  # parallel to the one before
+    return out
+
+
+def _real(x) -> str:
+    """A Part 21 real (``1.E-200``), or an integer as written."""
+    if not isinstance(x, float):
+        return str(x)
+    mantissa, _, exponent = repr(x).upper().partition("E")
+    if "." not in mantissa:
+        mantissa += "."
+    return mantissa + ("E" + exponent if exponent else "")
+
+
+@pytest.mark.parametrize("profile", ["ap242", "ap214"])
+def test_native_cross_product_is_the_express_function_on_many_directions(profile):
+    dirs = _directions()
+    header = AP242_HEADER if profile == "ap242" else AP242_HEADER.replace(
+        "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }",
+        "AUTOMOTIVE_DESIGN { 1 0 10303 214 3 1 1 1 }")
+    lines = [f"#{i}=DIRECTION('d',({','.join(_real(x) for x in d)}));"
+             for i, d in enumerate(dirs, 1)]
+    lines.append(f"#{len(dirs) + 1}=CARTESIAN_POINT('p',(0.,0.,0.));")
+    pop = _pop(header + "DATA;\n" + "\n".join(lines) + "\nENDSEC;\nEND-ISO-10303-21;\n")
+    assert pop.schema.name.lower().startswith("automotive" if profile == "ap214" else "ap242")
+    fast, plain = Evaluator(pop, memoize=False), Evaluator(pop, memoize=False, natives=False)
+    args = [pop.instance(i) for i in range(1, len(dirs) + 2)]
+    natively = 0
+    for a in args:
+        for b in args:
+            got = fast.call("cross_product", a, b)
+            assert _value_form(got) == _value_form(plain.call("cross_product", a, b)), (a.id, b.id)
+            natively += fast._cross_product(pop.schema.functions["cross_product"], [a, b]) \
+                is not Missing
+    assert natively > len(args) ** 2 // 2  # most pairs take the Python path
+
+
+def test_native_cross_product_results_decide_axis2_placement_3d_wr4():
+    # parallel axes break WR4; a 2D direction leaves it UNKNOWN (?); others pass
+    text = AP242_HEADER + """DATA;
+#1=CARTESIAN_POINT('',(0.,0.,0.));
+#2=DIRECTION('',(0.,0.,1.));
+#3=DIRECTION('',(1.,0.,0.));
+#4=DIRECTION('',(0.,0.,-3.));
+#5=DIRECTION('',(1.,0.));
+#6=AXIS2_PLACEMENT_3D('',#1,#2,#3);
+#7=AXIS2_PLACEMENT_3D('',#1,#2,#4);
+#8=AXIS2_PLACEMENT_3D('',#1,#2,#5);
+ENDSEC;
+END-ISO-10303-21;
+"""
+    pop = _pop(text)
+    fast, plain = Evaluator(pop), Evaluator(pop, memoize=False, natives=False)
+    got = [fast.where_rule(pop.instance(i), "axis2_placement_3d", "wr4") for i in (6, 7, 8)]
+    assert got == [plain.where_rule(pop.instance(i), "axis2_placement_3d", "wr4") for i in (6, 7, 8)]
+    assert got == [True, False, None]
+
+
+@pytest.mark.parametrize("profile", ["ap242", "ap214"])
+def test_native_dimension_of_is_the_express_function(profile):
+    header = AP242_HEADER if profile == "ap242" else AP242_HEADER.replace(
+        "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }",
+        "AUTOMOTIVE_DESIGN { 1 0 10303 214 3 1 1 1 }")
+    text = header + """DATA;
+#1=CARTESIAN_POINT('',(0.,0.,0.));
+#2=CARTESIAN_POINT('',(1.,2.));
+#3=CARTESIAN_POINT('',(5.));
+#4=DIRECTION('',(0.,0.,1.));
+#5=DIRECTION('',(0.,1.));
+#6=DIRECTION('',(0.,0.,0.));
+#7=VECTOR('',#4,2.);
+#8=AXIS2_PLACEMENT_3D('',#1,#4,$);
+#9=(GEOMETRIC_REPRESENTATION_CONTEXT(2)REPRESENTATION_CONTEXT('c','t'));
+#10=REPRESENTATION('r',(#8,#11),#9);
+#11=AXIS2_PLACEMENT_2D('',#2,#5);
+#12=CARTESIAN_POINT('',$);
+#13=DIRECTION('',(0.,0.,1.,0.));
+ENDSEC;
+END-ISO-10303-21;
+"""
+    pop = _pop(text)
+    fast, plain = Evaluator(pop, memoize=False), Evaluator(pop, memoize=False, natives=False)
+    f = pop.schema.functions["dimension_of"]
+    natively = []
+    for iid in range(1, 14):
+        if iid in (9, 10):
+            continue
+        inst = pop.instance(iid)
+        got = fast.call("dimension_of", inst)
+        assert _value_form(got) == _value_form(plain.call("dimension_of", inst)), iid
+        if fast._dimension_of(f, [inst]) is not Missing:
+            natively.append(iid)
+    assert natively == [1, 2, 3, 4, 5, 6, 13]
+    assert [_value_form(fast.call("dimension_of", pop.instance(i)))[2] for i in (1, 2, 3, 8, 11)] \
+        == [("int", "3"), ("int", "2"), ("int", "1"), ("int", "2"), ("int", "2")]
+
+
+@pytest.mark.parametrize("edit", [
+    None,
+    ("'crank-coupler pin',#149,#153,#134,", "'crank-coupler pin',#149,#153,#133,"),  # a joint twice
+    ("'coupler-rocker pin',#157,#161,#135,", "'coupler-rocker pin',#157,#161,$,"),  # no joint: ?
+    ("#190=MECHANISM_REPRESENTATION('four_bar',(#186,#187,#188,#189)",
+     "#190=MECHANISM_REPRESENTATION('four_bar',(#189,#186,#189,#188)"),  # order, a pair twice
+])
+def test_native_collect_joints_is_the_express_function(edit):
+    text = (EXAMPLES / "four_bar_ap242.stp").read_text()
+    if edit:
+        assert edit[0] in text
+        text = text.replace(edit[0], edit[1])
+    pop = _pop(text)
+    fast, plain = Evaluator(pop, memoize=False), Evaluator(pop, memoize=False, natives=False)
+    mech = pop.instance(190)
+    items = fast.attribute(mech, "items")
+    got = fast.call("collect_joints", items)
+    assert _value_form(got) == _value_form(plain.call("collect_joints", plain.attribute(mech, "items")))
+    native = fast._collect_joints(pop.schema.functions["collect_joints"], [items])
+    assert (native is Missing) == (edit is not None and "$" in edit[1])
+    expected = {None: [133, 134, 135, 136], 1: [133, 135, 136], 3: [136, 133, 135]}
+    if native is not Missing:
+        index = None if edit is None else (1 if "#133," in edit[1] else 3)
+        assert [j.id for j in got] == expected[index]
+    assert fast.where_rule(mech, "mechanism_representation", "wr1") == \
+        plain.where_rule(mech, "mechanism_representation", "wr1")

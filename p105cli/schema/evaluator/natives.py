@@ -22,16 +22,41 @@ interpreter runs the EXPRESS body instead, so the result is always the standard'
 same loop here, with the evaluator's own attribute access and comparisons, so that
 UNKNOWN and ``?`` behave as in the EXPRESS body.
 
+``cross_product(arg1, arg2)`` (ISO 10303-42, both long forms; ``axis2_placement_3d.wr4``
+calls it for every placement) normalises two directions and crosses them: the interpreter
+builds four in-memory entity values per call. Here the same floating-point operations in the
+same order (sum of squares from 0.0, SQRT, division; the cross terms as written), and the
+result built by the evaluator's own entity constructor and ``||`` from ``dummy_gri``, so
+the value is the one the body returns. Only two population directions of 2 or 3 finite real
+ratios take this path; a zero direction (``normalise`` gives ``?``), an overflowing sum of
+squares or anything else is left to the body.
+
+``dimension_of(item)`` (the derived ``dim`` of every geometric item, read by the placement
+rules) of a plain cartesian point or direction is the number of its coordinates or ratios,
+as the body's first two branches count them; any other item goes through the body.
+
+``collect_joints(items)`` (``mechanism_representation.wr1``) adds the joint of each pair to
+a SET in a REPEAT; interpreted, every ``result := result + joint`` copies and re-checks the
+whole set, quadratic in the pairs. Here the distinct joints in first-occurrence order (SET +
+element keeps the set when the element is in it, instance equality being identity); a
+joint that is not a population instance (``?``) is left to the body.
+
 A native applies only to a FUNCTION of that name with the expected parameters; any other
 argument (``?``, an in-memory entity value) is left to the interpreter.
 """
 
 from __future__ import annotations
 
+import math
+
 from ..instance import Instance
 from .builtins import hiindex
 from .scope import _MISSING
-from .values import Agg, _plain
+from .values import _IND, Agg, _plain
+
+_DIRECTION = frozenset({"direction"})
+#: leaf types whose dimension_of is SIZEOF of an explicit list, and that list
+_COUNTED = {frozenset({"cartesian_point"}): "coordinates", _DIRECTION: "direction_ratios"}
 
 
 class _Cycle(Exception):
@@ -118,6 +143,74 @@ class Natives:
             stack.pop()
         return memo[root]
 
+    def _cross_product(self, f, args):
+        ratios = [self._direction_ratios(a) for a in args]
+        if ratios[0] is None or ratios[1] is None:
+            return _MISSING
+        if len(ratios[0]) == 2 or len(ratios[1]) == 2:
+            return _IND  # arg.dim = 2: RETURN(?)
+        v1, v2 = (_normalised(r) for r in ratios)
+        if v1 is None or v2 is None:
+            return _MISSING
+        cross = [v1[1] * v2[2] - v1[2] * v2[1], v1[2] * v2[0] - v1[0] * v2[2],
+                 v1[0] * v2[1] - v1[1] * v2[0]]
+        node = f  # for the line of a NotEvaluable (none is expected here)
+        dummy = self._constant("dummy_gri")
+        res = self._combine(dummy, self._construct("direction", [Agg("bag", cross)], node), node)
+        mag = 0.0
+        for x in cross:
+            mag = mag + x * x
+        if not math.isfinite(mag):
+            return _MISSING
+        if mag > 0.0:
+            result = self._combine(dummy, self._construct("vector", [res, math.sqrt(mag)], node), node)
+        else:
+            result = self._combine(dummy, self._construct("vector", [args[0], 0.0], node), node)
+        return self._coerce(result, f.return_type)
+
+    def _collect_joints(self, f, args):
+        items = _plain(args[0])
+        declared = [lv.type for lv in f.locals if lv.name == "result"]
+        if type(items) is not Agg or len(declared) != 1:
+            return _MISSING
+        joints: list = []
+        seen: set = set()
+        for item in items:
+            joint = self._attr(self._attr(item, "transformation_operator", None, None), "joint", None, None)
+            if type(joint) is not Instance:
+                return _MISSING
+            if id(joint) not in seen:
+                seen.add(id(joint))
+                joints.append(joint)
+        return self._coerce(self._coerce(Agg("set", joints), declared[0]), f.return_type)
+
+    def _dimension_of(self, f, args):
+        x = args[0]
+        if type(x) is not Instance or x.pop is not self.pop:
+            return _MISSING
+        attribute = _COUNTED.get(x.leaf_types)
+        if attribute is None:
+            return _MISSING
+        raw = x.get(attribute)
+        if type(raw) is not list:
+            return _MISSING
+        declared = [lv.type for lv in f.locals if lv.name == "dim"]
+        if len(declared) != 1:
+            return _MISSING
+        return self._coerce(self._coerce(len(raw), declared[0]), f.return_type)
+
+    def _direction_ratios(self, x):
+        """The ratios of a population direction (a plain one, whose ``dim`` is their count)
+        when they are 2 or 3 finite reals, else None."""
+        if type(x) is not Instance or x.pop is not self.pop or x.leaf_types != _DIRECTION:
+            return None
+        raw = x.get("direction_ratios")
+        if type(raw) is not list or len(raw) not in (2, 3):
+            return None
+        for r in raw:
+            if type(r) is not float or not math.isfinite(r):
+                return None
+        return raw
 
     def _check_geometric_dimension(self, f, args):
         capt, dirs, grc = (_plain(a) for a in args)
@@ -160,8 +253,23 @@ class Natives:
         return hiindex(self._attr(x, attribute))
 
 
+def _normalised(ratios):
+    """``normalise(d).direction_ratios`` of a direction, in the body's order of operations;
+    None where the body returns ``?`` (zero length) or the sum of squares overflows."""
+    mag = 0.0
+    for r in ratios:
+        mag = mag + r * r
+    if not mag > 0.0 or not math.isfinite(mag):
+        return None
+    mag = math.sqrt(mag)
+    return [r / mag for r in ratios]
+
+
 #: function name -> (method, number of parameters)
 _NATIVES = {
     "using_representations": (Natives._using_representations, 1),
     "check_geometric_dimension": (Natives._check_geometric_dimension, 3),
+    "cross_product": (Natives._cross_product, 2),
+    "dimension_of": (Natives._dimension_of, 1),
+    "collect_joints": (Natives._collect_joints, 1),
 }

@@ -285,6 +285,16 @@ class Operators:
                     else:
                         out.append(y)
                 return Agg(a.kind, out)
+            drop = _string_counts(b if tb is Agg else [b], a)
+            if drop is not None:  # strings only: remove the first occurrences by value
+                out = []
+                for y in a:
+                    n = drop.get(y)
+                    if n:
+                        drop[y] = n - 1
+                    else:
+                        out.append(y)
+                return Agg(a.kind, out)
             out = list(a)
             for x in (b if tb is Agg else [b]):
                 for j, y in enumerate(out):
@@ -303,6 +313,15 @@ class Operators:
                         n = have.get(id(x))
                         if n:
                             have[id(x)] = n - 1
+                            out.append(x)
+                    return Agg(kind, self._dedupe(out) if kind == "set" else out)
+                have = _string_counts(b, a)
+                if have is not None:  # strings only: match occurrences by value
+                    out = []
+                    for x in a:
+                        n = have.get(x)
+                        if n:
+                            have[x] = n - 1
                             out.append(x)
                     return Agg(kind, self._dedupe(out) if kind == "set" else out)
                 rest = list(b)
@@ -328,6 +347,21 @@ class Operators:
             parts[k] = {n: _copy(x) for n, x in v.items()}
         types, leaf = self.pop.resolve_types(parts)
         return EntityValue(parts, types, leaf)
+
+
+def _string_counts(items, other):
+    """{string: occurrences} of ``items`` when every element of ``items`` and ``other`` is a
+    plain string (instance equality of strings is Python's ``==``: TYPEOF sets against the
+    long forms' lists of type names), else None."""
+    counts: dict = {}
+    for x in items:
+        if type(x) is not str:
+            return None
+        counts[x] = counts.get(x, 0) + 1
+    for y in other:
+        if type(y) is not str:
+            return None
+    return counts
 
 
 def _entity_counts(items):
