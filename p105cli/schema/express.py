@@ -33,15 +33,17 @@ points and the cache of parsed schemas).
 
 from __future__ import annotations
 
+import copyreg
 import gc
 import hashlib
+import io
 import os
 import pickle
 from pathlib import Path
 
 from p105cli.fileio import atomic_file
 
-from .model import Schema, SchemaError
+from .model import DEFERRED_FIELDS, Schema, SchemaError
 from .parser import BUILTIN_FUNCTIONS, BUILTIN_PROCEDURES, parse_schemas
 from .tokenizer import ExpressSyntaxError, strip_comments, tokenize
 
@@ -51,8 +53,8 @@ __all__ = [
     "tokenize",
 ]
 
-# Bump whenever the model or the parser's output changes: it keys the cache.
-PARSER_VERSION = 1
+# Bump whenever the model, the parser's output or the cache's encoding changes: it keys the cache.
+PARSER_VERSION = 2
 
 
 def parse_schema(text: str, filename: str = "<string>", name: str | None = None) -> Schema:
@@ -148,12 +150,36 @@ def load_schema(path, name: str | None = None, cache: bool = True) -> Schema:
     return _pick(load_schemas(path, cache), name, str(path))
 
 
+class _DeferringPickler(pickle.Pickler):
+    """Pickles a schema with the bodies of its rules and algorithms apart (model.DEFERRED_FIELDS):
+    each is a pickle of its own inside the instance's state, decoded when first read. Loading
+    a long form then builds its declarations, not the 200,000 nodes of bodies a run mostly
+    never evaluates."""
+
+    def reducer_override(self, obj):
+        names = DEFERRED_FIELDS.get(type(obj))
+        if names is None:
+            return NotImplemented
+        state = dict(obj.__dict__)
+        if "_deferred" not in state:  # else still encoded: kept as it is
+            later = {n: state.pop(n) for n in names}
+            state["_deferred"] = _encode(later)  # nested bodies deferred in their turn
+        return copyreg.__newobj__, (type(obj),), state
+
+
+def _encode(obj) -> bytes:
+    buf = io.BytesIO()
+    _DeferringPickler(buf, protocol=pickle.HIGHEST_PROTOCOL).dump(obj)
+    return buf.getvalue()
+
+
 def _write_cache(cp: Path, obj) -> None:
     # An unwritable cache only costs speed: failures are swallowed.
     try:
+        blob = _encode(obj)
         cp.parent.mkdir(parents=True, exist_ok=True)
         with atomic_file(cp, binary=True) as f:
-            pickle.dump(obj, f, protocol=pickle.HIGHEST_PROTOCOL)
+            f.write(blob)
     except (OSError, pickle.PicklingError, RecursionError):
         pass
 

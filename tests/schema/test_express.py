@@ -780,3 +780,59 @@ def test_compiled_package_schemas_are_used_before_the_user_cache(tmp_path, monke
     schema = express.load_schema(data_dir / "AP242_N10962_mim_lf.exp")
     assert "revolute_pair" in schema.entities
     assert not (tmp_path / "user").exists()      # served from the compiled form, nothing rebuilt
+
+
+DEFERRING = wrap("""
+ENTITY a;
+  x : INTEGER;
+  y : REAL;
+DERIVE
+  z : REAL := x * y;
+WHERE
+  wr1: x > 0;
+END_ENTITY;
+ENTITY b SUBTYPE OF (a);
+DERIVE
+  SELF\\a.y : REAL := 2.0;
+END_ENTITY;
+FUNCTION twice(v : INTEGER) : INTEGER;
+  LOCAL w : INTEGER := v; END_LOCAL;
+  RETURN (w + v);
+END_FUNCTION;
+RULE positive FOR (a);
+WHERE
+  wr1: SIZEOF(QUERY(i <* a | twice(i.x) < 0)) = 0;
+END_RULE;
+""")
+
+
+def test_cache_defers_bodies_until_read():
+    import threading
+
+    from p105cli.schema.express import _encode
+    parsed = parse_schema(DEFERRING)
+    loaded = pickle.loads(_encode(parsed))
+    ent, f, rule = loaded.entities["a"], loaded.functions["twice"], loaded.rules["positive"]
+    # Read without decoding: the type graph, derivations' names, what a rule applies to.
+    assert loaded.all_supertypes("b") == ["a"] and loaded.entities["a"].subtypes == ["b"]
+    assert [d.name for d in ent.derived] == ["z"] and rule.applies_to == ["a"]
+    assert all("_deferred" in o.__dict__ for o in (ent, f, rule, ent.derived[0]))
+    assert "where" not in ent.__dict__ and "body" not in f.__dict__
+    # The first read decodes the instance's deferred fields, once, also with threads racing.
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(f.body)) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 8 and all(b is got[0] for b in got)
+    assert "_deferred" not in f.__dict__ and f.line == parsed.functions["twice"].line
+    assert f == parsed.functions["twice"]
+    # Still-encoded parts survive another pickling (a copy sent to another process) as they are.
+    again = pickle.loads(pickle.dumps(loaded))
+    assert "_deferred" in again.entities["a"].__dict__
+    assert again == loaded == parsed
+    assert again.p21_attributes("b") == parsed.p21_attributes("b")
+    assert again.entities["a"].where_rule("WR1").expr == parsed.entities["a"].where[0].expr
+    with pytest.raises(AttributeError):
+        again.functions["twice"].no_such_field  # noqa: B018
