@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 
 
 class AtomicWriteError(OSError):
@@ -33,6 +32,8 @@ def atomic_file(path, binary: bool = False):
     Failures of the mechanism itself (creating the temporary file, renaming it)
     raise AtomicWriteError; exceptions from the caller's block pass unchanged.
     """
+    import tempfile  # here: it pulls in shutil, bz2, lzma and random, which most runs never need
+
     path = os.fspath(path)
     directory = os.path.dirname(os.path.abspath(path))
     try:

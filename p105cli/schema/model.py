@@ -1,8 +1,8 @@
 """The data model of a parsed EXPRESS (ISO 10303-11) schema.
 
 Everything here is a plain dataclass: the parser (``parser.py``) builds
-it, the cache pickles it, and later consumers (the evaluator, the Part 21
-schema checks) only read it. Every node carries ``line``, the 1-based
+it, the cache pickles it (some fields deferred: ``DEFERRED_FIELDS``), and
+later consumers (the evaluator, the Part 21 schema checks) only read it. Every node carries ``line``, the 1-based
 source line where it starts, so that messages can point into the schema.
 
 Names (entities, types, attributes, variables, enumeration items) are kept
