@@ -34,7 +34,7 @@ from __future__ import annotations
 import pickle
 import reprlib
 import threading
-from dataclasses import dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields
 from operator import attrgetter
 from typing import Any, Optional, Union
 
@@ -45,13 +45,19 @@ class SchemaError(LookupError):
 
 
 class _Fields:
-    """The ``==`` and ``repr`` of a dataclass, once for all: ``@dataclass`` compiles two
-    methods per class, and with 50 classes that was most of the import time of this module
-    on every command's start-up. Same results (``node``)."""
+    """The ``__init__``, ``==`` and ``repr`` of a dataclass, without compiling three methods
+    per class at import: with 51 classes that was most of the import time of this module,
+    on every command's start-up, and a loaded schema is unpickled, not constructed. ``==``
+    and ``repr`` are shared; a class's ``__init__`` is compiled when it is first called.
+    Same results as ``@dataclass(eq=True)`` (``node``)."""
 
     __slots__ = ()
     _compared = staticmethod(lambda obj: ())  # set by ``node``
     _shown: tuple = ()
+
+    def __init__(self, *args, **kwargs):
+        init = _compile_init(type(self))
+        init(self, *args, **kwargs)
 
     def __eq__(self, other):
         if other.__class__ is self.__class__:
@@ -64,10 +70,35 @@ class _Fields:
                 + ", ".join(f"{n}={getattr(self, n)!r}" for n in self._shown) + ")")
 
 
+_FACTORY = object()  # the default of a parameter whose field has a default_factory
+
+
+def _compile_init(cls):
+    """The ``__init__`` that ``@dataclass`` writes for ``cls``, set on the class."""
+    params, body, env = [], [], {"_FACTORY": _FACTORY}
+    for f in fields(cls):
+        n = f.name
+        if f.default_factory is not MISSING:
+            env[f"_factory_{n}"] = f.default_factory
+            params.append(f"{n}=_FACTORY")
+            body.append(f"self.{n} = _factory_{n}() if {n} is _FACTORY else {n}")
+        else:
+            if f.default is not MISSING:
+                env[f"_default_{n}"] = f.default
+            params.append(n if f.default is MISSING else f"{n}=_default_{n}")
+            body.append(f"self.{n} = {n}")
+    exec(f"def __init__(self, {', '.join(params)}):\n    " + "\n    ".join(body or ["pass"]), env)
+    init = env["__init__"]
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    cls.__init__ = init
+    return init
+
+
 def node(cls):
-    """``@dataclass(eq=True)`` with ``_Fields``' methods: ``==`` on the fields with
-    ``compare``, as a tuple in order; repr of the fields with ``repr``."""
-    cls = dataclass(eq=False, repr=False)(cls)
+    """``@dataclass(eq=True)`` with ``_Fields``' methods: ``__init__`` compiled on first
+    use, ``==`` on the fields with ``compare`` (as a tuple, in order), repr of the fields
+    with ``repr``."""
+    cls = dataclass(init=False, eq=False, repr=False)(cls)
     names = tuple(f.name for f in fields(cls) if f.compare)
     get = attrgetter(*names) if names else None
     cls._compared = staticmethod(get if len(names) > 1 else   # attrgetter of one name: no tuple

@@ -63,6 +63,34 @@ def test_equality_and_repr_are_those_of_dataclasses(cls):
         hash(x)
 
 
+@pytest.mark.parametrize("cls", CLASSES, ids=lambda c: c.__name__)
+def test_construction_is_that_of_dataclasses(cls):
+    twin = _twin(cls)
+    base = _values(cls, "a")
+    names = list(base)
+    assert vars(cls(*base.values())) == vars(twin(*base.values())) == vars(cls(**base))
+    required = [f.name for f in dataclasses.fields(cls)
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    assert names[:len(required)] == required  # the parameters are the fields, in order
+    only = {n: base[n] for n in required}
+    x, rx = cls(**only), twin(**only)
+    assert vars(x) == vars(rx)  # defaults, and a fresh object from each default_factory
+    for f in dataclasses.fields(cls):
+        if f.default_factory is not dataclasses.MISSING:
+            assert getattr(x, f.name) == f.default_factory()
+            assert getattr(x, f.name) is not getattr(cls(**only), f.name)
+    with pytest.raises(TypeError):
+        cls(*base.values(), "one too many")
+    with pytest.raises(TypeError):
+        cls(**base, no_such_field=1)
+    if required:
+        with pytest.raises(TypeError):
+            cls(**{n: base[n] for n in required[1:]})
+    sig, ref = inspect.signature(cls), inspect.signature(twin)
+    assert [(p.name, p.kind) for p in sig.parameters.values()] == [
+        (p.name, p.kind) for p in ref.parameters.values()]
+
+
 def test_defaults_and_class_attributes_are_kept():
     e = M.Entity("e")
     assert e.supertypes == [] and e.supertypes is not M.Entity("f").supertypes
