@@ -223,4 +223,6 @@ def compile_package_schemas() -> list[Path]:
         if not target.is_file():
             raise OSError(f"could not write {target}")
         written.append(target)
+    for stale in set(COMPILED_DIR.glob("express-v*-*.pickle")) - set(written):
+        stale.unlink()  # another parser version's or a replaced long form's: never read again
     return written

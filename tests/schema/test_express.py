@@ -774,8 +774,12 @@ def test_compiled_package_schemas_are_used_before_the_user_cache(tmp_path, monke
     import p105cli.schema.express as express
     monkeypatch.setattr(express, "COMPILED_DIR", tmp_path / "compiled")
     monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "user"))
+    (tmp_path / "compiled").mkdir()
+    stale = tmp_path / "compiled" / "express-v1-0123.pickle"  # an older parser's
+    stale.write_bytes(b"old")
     written = express.compile_package_schemas()
     assert len(written) == 2 and all(p.parent == tmp_path / "compiled" for p in written)
+    assert sorted((tmp_path / "compiled").iterdir()) == sorted(written)  # the stale one is gone
     data_dir = Path(express.__file__).resolve().parent / "data"
     schema = express.load_schema(data_dir / "AP242_N10962_mim_lf.exp")
     assert "revolute_pair" in schema.entities
@@ -836,3 +840,21 @@ def test_cache_defers_bodies_until_read():
     assert again.entities["a"].where_rule("WR1").expr == parsed.entities["a"].where[0].expr
     with pytest.raises(AttributeError):
         again.functions["twice"].no_such_field  # noqa: B018
+
+
+def test_cache_filled_by_processes_at_once(tmp_path):
+    # make -j: several processes find the cache empty and write the same entry together.
+    import subprocess
+    import sys
+    src = tmp_path / "s.exp"
+    src.write_text(DEFERRING)
+    code = ("import sys; from p105cli.schema import load_schema; "
+            "s = load_schema(sys.argv[1]); print(s.functions['twice'].parameters[0].name)")
+    env = {**os.environ, "P105_CACHE_DIR": str(tmp_path / "cache")}
+    procs = [subprocess.Popen([sys.executable, "-c", code, str(src)], stdout=subprocess.PIPE,
+                              env=env, cwd=Path(__file__).resolve().parents[2]) for _ in range(4)]
+    assert [p.communicate(timeout=60)[0].strip() for p in procs] == [b"v"] * 4
+    assert [p.returncode for p in procs] == [0] * 4
+    [entry] = list((tmp_path / "cache").iterdir())  # one entry, no temporary file left
+    assert entry.name.startswith(f"express-v{PARSER_VERSION}-") and entry.suffix == ".pickle"
+    assert pickle.loads(entry.read_bytes())[2][0] == parse_schema(DEFERRING)
