@@ -19,8 +19,6 @@ import contextlib
 import errno
 import os
 import re
-import socket
-import tempfile
 
 #: Marks p105's temporary files among other hidden files of a directory.
 TEMP_MARK = ".p105-"
@@ -46,6 +44,8 @@ def _default_mode(path: str) -> int:
 
 def _host() -> str:
     # In the name so that on a shared (network) directory only this host's dead processes are judged.
+    import socket  # only when a file is written
+
     return re.sub(r"[^A-Za-z0-9]", "", socket.gethostname())[:24] or "host"
 
 
@@ -107,6 +107,8 @@ class PendingFile:
         remove_stale_temporaries(self.path)
         directory = os.path.dirname(os.path.abspath(self.path))
         try:
+            import tempfile  # here: it pulls in shutil, bz2, lzma and random, which most runs never need
+
             fd, self.temp = tempfile.mkstemp(prefix=f"{_temp_prefix(self.path)}{os.getpid()}-", suffix=".tmp",
                                              dir=directory)
         except OSError as err:

@@ -95,6 +95,13 @@ def _single_threaded_blas() -> None:
         os.environ.setdefault(var, "1")
 
 
+def _step_error():
+    # What `except` matches for a Part 21 error, looked up only when something was raised: the
+    # step package is not imported for --version or --help, and without it nothing raised one.
+    errors = sys.modules.get("p105cli.step.errors")
+    return errors.StepError if errors is not None else ()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the p105 CLI and return its exit code.
 
@@ -116,7 +123,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(argv: list[str] | None) -> int:
-    from p105cli.step.errors import StepError
     try:
         # Without standalone mode click returns a click.exceptions.Exit's code instead of raising it.
         rv = cli.main(args=argv, prog_name="p105", standalone_mode=False)
@@ -133,7 +139,7 @@ def _run(argv: list[str] | None) -> int:
     except click.ClickException as err:
         err.show()
         return ExitCode.USAGE if isinstance(err, click.UsageError) else err.exit_code
-    except StepError as err:
+    except _step_error() as err:
         diag("error", str(err))
         if Settings.verbosity > 0:
             import traceback

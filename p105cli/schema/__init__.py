@@ -8,7 +8,10 @@ a model file seen through a schema, and ``evaluator/`` for EXPRESS run on it.
 """
 
 from .express import (  # noqa: F401
-    BUILTIN_FUNCTIONS, BUILTIN_PROCEDURES, PARSER_VERSION, ExpressSyntaxError, cache_dir,
-    load_schema, load_schemas, parse_schema, parse_schemas,
+    PARSER_VERSION, cache_dir, load_schema, load_schemas, parse_schema, parse_schemas, reader_name,
 )
 from .model import Entity, P21Attribute, Schema, SchemaError  # noqa: F401
+
+
+def __getattr__(name: str):  # BUILTIN_FUNCTIONS, ExpressSyntaxError, ...: imported on first use
+    return reader_name(name, __name__)

@@ -1,8 +1,8 @@
 """The data model of a parsed EXPRESS (ISO 10303-11) schema.
 
 Everything here is a plain dataclass: the parser (``parser.py``) builds
-it, the cache pickles it, and later consumers (the evaluator, the Part 21
-schema checks) only read it. Every node carries ``line``, the 1-based
+it, the cache pickles it (some fields deferred: ``DEFERRED_FIELDS``), and
+later consumers (the evaluator, the Part 21 schema checks) only read it. Every node carries ``line``, the 1-based
 source line where it starts, so that messages can point into the schema.
 
 Names (entities, types, attributes, variables, enumeration items) are kept
@@ -31,7 +31,11 @@ Declarations
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import pickle
+import reprlib
+import threading
+from dataclasses import MISSING, dataclass, field, fields
+from operator import attrgetter
 from typing import Any, Optional, Union
 
 
@@ -40,7 +44,70 @@ class SchemaError(LookupError):
     (unknown entity, a SUBTYPE OF naming an undeclared entity, ...)."""
 
 
-class Node:
+class _Fields:
+    """The ``__init__``, ``==`` and ``repr`` of a dataclass, without compiling three methods
+    per class at import: with 51 classes that was most of the import time of this module,
+    on every command's start-up, and a loaded schema is unpickled, not constructed. ``==``
+    and ``repr`` are shared; a class's ``__init__`` is compiled when it is first called.
+    Same results as ``@dataclass(eq=True)`` (``node``)."""
+
+    __slots__ = ()
+    _compared = staticmethod(lambda obj: ())  # set by ``node``
+    _shown: tuple = ()
+
+    def __init__(self, *args, **kwargs):
+        init = _compile_init(type(self))
+        init(self, *args, **kwargs)
+
+    def __eq__(self, other):
+        if other.__class__ is self.__class__:
+            return self._compared(self) == self._compared(other)
+        return NotImplemented
+
+    @reprlib.recursive_repr()
+    def __repr__(self) -> str:
+        return (f"{self.__class__.__qualname__}("
+                + ", ".join(f"{n}={getattr(self, n)!r}" for n in self._shown) + ")")
+
+
+_FACTORY = object()  # the default of a parameter whose field has a default_factory
+
+
+def _compile_init(cls):
+    """The ``__init__`` that ``@dataclass`` writes for ``cls``, set on the class."""
+    params, body, env = [], [], {"_FACTORY": _FACTORY}
+    for f in fields(cls):
+        n = f.name
+        if f.default_factory is not MISSING:
+            env[f"_factory_{n}"] = f.default_factory
+            params.append(f"{n}=_FACTORY")
+            body.append(f"self.{n} = _factory_{n}() if {n} is _FACTORY else {n}")
+        else:
+            if f.default is not MISSING:
+                env[f"_default_{n}"] = f.default
+            params.append(n if f.default is MISSING else f"{n}=_default_{n}")
+            body.append(f"self.{n} = {n}")
+    exec(f"def __init__(self, {', '.join(params)}):\n    " + "\n    ".join(body or ["pass"]), env)
+    init = env["__init__"]
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    cls.__init__ = init
+    return init
+
+
+def node(cls):
+    """``@dataclass(eq=True)`` with ``_Fields``' methods: ``__init__`` compiled on first
+    use, ``==`` on the fields with ``compare`` (as a tuple, in order), repr of the fields
+    with ``repr``."""
+    cls = dataclass(init=False, eq=False, repr=False)(cls)
+    names = tuple(f.name for f in fields(cls) if f.compare)
+    get = attrgetter(*names) if names else None
+    cls._compared = staticmethod(get if len(names) > 1 else   # attrgetter of one name: no tuple
+                                 (lambda obj: (get(obj),)) if names else (lambda obj: ()))
+    cls._shown = tuple(f.name for f in fields(cls) if f.repr)
+    return cls
+
+
+class Node(_Fields):
     """Base of every AST node; subclasses are dataclasses with ``line``."""
 
     __slots__ = ()
@@ -54,7 +121,7 @@ class Expr(Node):
     __slots__ = ()
 
 
-@dataclass(eq=True)
+@node
 class Literal(Expr):
     """A literal. ``kind`` is one of ``integer`` (int), ``real`` (float),
     ``string`` (str; simple and encoded strings alike, already decoded),
@@ -67,7 +134,7 @@ class Literal(Expr):
     encoded: bool = False  # string given as "..." (encoded) in the source
 
 
-@dataclass(eq=True)
+@node
 class Name(Expr):
     """A bare identifier: attribute, variable, parameter, constant,
     enumeration item, or an entity/type name used as a population/type."""
@@ -76,12 +143,12 @@ class Name(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class SelfRef(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class BuiltinConstant(Expr):
     """``CONST_E`` or ``PI`` (name kept lower case)."""
 
@@ -89,7 +156,7 @@ class BuiltinConstant(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class UnaryOp(Expr):
     """``op`` is ``not``, ``-`` or ``+``."""
 
@@ -98,7 +165,7 @@ class UnaryOp(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class BinaryOp(Expr):
     """``op``: ``** * / div mod and || + - or xor = <> < > <= >= :=: :<>: in like``
     (word operators lower case)."""
@@ -109,7 +176,7 @@ class BinaryOp(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Interval(Expr):
     """``{low op1 item op2 high}``, each op ``<`` or ``<=``."""
 
@@ -121,7 +188,7 @@ class Interval(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class AttributeRef(Expr):
     """``base.attribute``."""
 
@@ -130,7 +197,7 @@ class AttributeRef(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class GroupRef(Expr):
     """``base\\entity`` (group qualifier)."""
 
@@ -139,7 +206,7 @@ class GroupRef(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class IndexRef(Expr):
     """``base[index]``, or ``base[index:upper]`` when ``upper`` is not None."""
 
@@ -149,7 +216,7 @@ class IndexRef(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Call(Expr):
     """``name(args)``: a function call or an entity constructor (same syntax).
 
@@ -163,7 +230,7 @@ class Call(Expr):
     kind: str = "unknown"
 
 
-@dataclass(eq=True)
+@node
 class AggregateElement(Node):
     """One element of an aggregate initialiser: ``value`` or ``value : repeat``."""
 
@@ -172,7 +239,7 @@ class AggregateElement(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class AggregateInit(Expr):
     """``[e1, e2 : n, ...]``."""
 
@@ -180,7 +247,7 @@ class AggregateInit(Expr):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Query(Expr):
     """``QUERY(variable <* aggregate | condition)``."""
 
@@ -198,12 +265,12 @@ class Stmt(Node):
     __slots__ = ()
 
 
-@dataclass(eq=True)
+@node
 class NullStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Assignment(Stmt):
     """``target := value;`` (target: Name with qualifiers)."""
 
@@ -212,7 +279,7 @@ class Assignment(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class IfStmt(Stmt):
     condition: Expr
     then_body: list
@@ -220,14 +287,14 @@ class IfStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class CaseAction(Node):
     labels: list
     body: Stmt
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class CaseStmt(Stmt):
     selector: Expr
     actions: list
@@ -235,7 +302,7 @@ class CaseStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class RepeatStmt(Stmt):
     """REPEAT [variable := start TO end [BY increment]] [WHILE c] [UNTIL c]."""
 
@@ -249,29 +316,29 @@ class RepeatStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class ReturnStmt(Stmt):
     value: Optional[Expr] = None
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class EscapeStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class SkipStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class CompoundStmt(Stmt):
     body: list
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class AliasStmt(Stmt):
     name: str
     target: Expr
@@ -279,7 +346,7 @@ class AliasStmt(Stmt):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class ProcedureCall(Stmt):
     """``name(args);`` — ``builtin`` for INSERT/REMOVE."""
 
@@ -297,7 +364,7 @@ class TypeSpec(Node):
     __slots__ = ()
 
 
-@dataclass(eq=True)
+@node
 class SimpleType(TypeSpec):
     """INTEGER, REAL [(precision)], NUMBER, LOGICAL, BOOLEAN,
     STRING [(width) [FIXED]], BINARY [(width) [FIXED]]."""
@@ -308,7 +375,7 @@ class SimpleType(TypeSpec):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class NamedType(TypeSpec):
     """A reference to an entity or defined type by name."""
 
@@ -316,7 +383,7 @@ class NamedType(TypeSpec):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class AggregateType(TypeSpec):
     """LIST/SET/BAG/ARRAY [lower:upper] OF [OPTIONAL] [UNIQUE] element, or the
     generalised AGGREGATE [:label] OF element. Bounds are expressions (``?``
@@ -332,7 +399,7 @@ class AggregateType(TypeSpec):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class GenericType(TypeSpec):
     """GENERIC [:label] or GENERIC_ENTITY [:label] (kind ``generic`` /
     ``generic_entity``)."""
@@ -342,7 +409,7 @@ class GenericType(TypeSpec):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class SelectType(TypeSpec):
     items: list  # names
     extensible: bool = False
@@ -351,7 +418,7 @@ class SelectType(TypeSpec):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class EnumerationType(TypeSpec):
     items: list  # names (lower case)
     extensible: bool = False
@@ -363,7 +430,7 @@ class EnumerationType(TypeSpec):
 # declarations
 
 
-@dataclass(eq=True)
+@node
 class WhereRule(Node):
     """A domain rule of a WHERE clause; ``label`` is None when unlabelled."""
 
@@ -372,7 +439,7 @@ class WhereRule(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Constant(Node):
     name: str
     type: TypeSpec
@@ -380,7 +447,7 @@ class Constant(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class TypeDecl(Node):
     name: str
     underlying: TypeSpec
@@ -388,7 +455,7 @@ class TypeDecl(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class ExplicitAttribute(Node):
     """An explicit attribute. For a redeclaration ``SELF\\sup.attr [RENAMED n]``
     ``name`` is ``attr``, ``supertype`` is ``sup`` and ``renamed`` is ``n``."""
@@ -409,7 +476,7 @@ class ExplicitAttribute(Node):
         return self.renamed or self.name
 
 
-@dataclass(eq=True)
+@node
 class DerivedAttribute(Node):
     name: str
     type: TypeSpec
@@ -427,7 +494,7 @@ class DerivedAttribute(Node):
         return self.renamed or self.name
 
 
-@dataclass(eq=True)
+@node
 class InverseAttribute(Node):
     """``name : [SET|BAG [lower:upper] OF] entity FOR [for_entity.]for_attribute``;
     ``aggregate`` is None for a single-valued inverse."""
@@ -452,7 +519,7 @@ class InverseAttribute(Node):
         return self.renamed or self.name
 
 
-@dataclass(eq=True)
+@node
 class UniqueAttribute(Node):
     """An attribute of a uniqueness rule: ``name`` or ``SELF\\supertype.name``."""
 
@@ -461,14 +528,14 @@ class UniqueAttribute(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class UniqueRule(Node):
     label: Optional[str]
     attributes: list  # of UniqueAttribute
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class SupertypeOp(Node):
     """A node of a supertype expression: ``op`` is ``oneof``, ``and`` or
     ``andor``; operands are entity names (str) or nested SupertypeOp."""
@@ -481,7 +548,7 @@ class SupertypeOp(Node):
 SupertypeExpr = Union[str, SupertypeOp]
 
 
-@dataclass(eq=True)
+@node
 class Entity(Node):
     name: str
     supertypes: list = field(default_factory=list)  # SUBTYPE OF (...), in order
@@ -507,7 +574,7 @@ class Entity(Node):
         raise SchemaError(f"entity {self.name} has no WHERE rule {label}")
 
 
-@dataclass(eq=True)
+@node
 class Parameter(Node):
     name: str
     type: TypeSpec
@@ -515,7 +582,7 @@ class Parameter(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class LocalVariable(Node):
     name: str
     type: TypeSpec
@@ -523,7 +590,7 @@ class LocalVariable(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Function(Node):
     name: str
     parameters: list
@@ -535,7 +602,7 @@ class Function(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Procedure(Node):
     name: str
     parameters: list
@@ -546,7 +613,7 @@ class Procedure(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Rule(Node):
     """A global RULE name FOR (entities); WHERE rules over those populations."""
 
@@ -560,7 +627,7 @@ class Rule(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class SubtypeConstraint(Node):
     name: str
     entity: str
@@ -570,7 +637,7 @@ class SubtypeConstraint(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
+@node
 class Interface(Node):
     """USE FROM / REFERENCE FROM; ``items`` are (name, alias-or-None)."""
 
@@ -580,8 +647,8 @@ class Interface(Node):
     line: int = 0
 
 
-@dataclass(eq=True)
-class P21Attribute:
+@node
+class P21Attribute(_Fields):
     """One slot of a Part 21 simple instance (see Schema.p21_attributes).
 
     ``entity`` is the entity that first declares the attribute; ``type`` and
@@ -602,7 +669,67 @@ class P21Attribute:
         return ("*" if self.derived else "") + self.name
 
 
-@dataclass(eq=True)
+# --------------------------------------------------------------------------
+# deferred fields
+
+
+class _Deferred:
+    """A field that a cached schema stores encoded and decodes on first access.
+
+    A run evaluates a few hundred of the thousands of rules and algorithms of a
+    long form, so the cache (express.py) keeps their bodies as one pickle each, in
+    the instance's ``_deferred`` slot; reading any deferred field decodes them all
+    into the instance's ``__dict__``, which then shadows this non-data descriptor:
+    later reads cost nothing. Objects built by the parser never hold ``_deferred``.
+    """
+
+    __slots__ = ("name", "class_value")
+
+    def __init__(self, name: str, class_value):
+        self.name = name
+        self.class_value = class_value  # the dataclass default it replaces on the class
+
+    def __get__(self, inst, owner=None):
+        if inst is None:
+            if self.class_value is _NO_DEFAULT:
+                raise AttributeError(self.name)
+            return self.class_value
+        d = inst.__dict__
+        with _DECODING:  # one decode per instance, even with threads
+            blob = d.get("_deferred")
+            if blob is not None:
+                d.update(pickle.loads(blob))
+                del d["_deferred"]
+        try:
+            return d[self.name]
+        except KeyError:
+            raise AttributeError(f"{type(inst).__name__!r} object has no attribute "
+                                 f"{self.name!r}") from None
+
+
+_NO_DEFAULT = object()
+_DECODING = threading.Lock()
+
+#: Per class, the fields the schema cache defers (see _Deferred): the bodies of WHERE rules,
+#: derivations, functions, procedures and global rules, and the declarations of an entity but
+#: its place in the type graph and its derivations (what is read of every entity). A Rule's
+#: ``applies_to`` stays at hand (validate picks the rules that apply by it), and so does every
+#: name.
+DEFERRED_FIELDS = {
+    Entity: ("attributes", "inverse", "unique", "where", "supertype_expr", "line"),
+    WhereRule: ("expr",),
+    DerivedAttribute: ("expr",),
+    Function: ("parameters", "return_type", "declarations", "constants", "locals", "body", "line"),
+    Procedure: ("parameters", "declarations", "constants", "locals", "body", "line"),
+    Rule: ("declarations", "constants", "locals", "body", "where", "line"),
+}
+for _cls, _names in DEFERRED_FIELDS.items():
+    for _name in _names:
+        setattr(_cls, _name, _Deferred(_name, _cls.__dict__.get(_name, _NO_DEFAULT)))
+del _cls, _names, _name
+
+
+@node
 class Schema(Node):
     """A parsed schema. ``name`` is None for a bare list of declarations
     (a file without SCHEMA ... END_SCHEMA, e.g. an extracted subset)."""

@@ -774,9 +774,87 @@ def test_compiled_package_schemas_are_used_before_the_user_cache(tmp_path, monke
     import p105cli.schema.express as express
     monkeypatch.setattr(express, "COMPILED_DIR", tmp_path / "compiled")
     monkeypatch.setenv("P105_CACHE_DIR", str(tmp_path / "user"))
+    (tmp_path / "compiled").mkdir()
+    stale = tmp_path / "compiled" / "express-v1-0123.pickle"  # an older parser's
+    stale.write_bytes(b"old")
     written = express.compile_package_schemas()
     assert len(written) == 2 and all(p.parent == tmp_path / "compiled" for p in written)
+    assert sorted((tmp_path / "compiled").iterdir()) == sorted(written)  # the stale one is gone
     data_dir = Path(express.__file__).resolve().parent / "data"
     schema = express.load_schema(data_dir / "AP242_N10962_mim_lf.exp")
     assert "revolute_pair" in schema.entities
     assert not (tmp_path / "user").exists()      # served from the compiled form, nothing rebuilt
+
+
+DEFERRING = wrap("""
+ENTITY a;
+  x : INTEGER;
+  y : REAL;
+DERIVE
+  z : REAL := x * y;
+WHERE
+  wr1: x > 0;
+END_ENTITY;
+ENTITY b SUBTYPE OF (a);
+DERIVE
+  SELF\\a.y : REAL := 2.0;
+END_ENTITY;
+FUNCTION twice(v : INTEGER) : INTEGER;
+  LOCAL w : INTEGER := v; END_LOCAL;
+  RETURN (w + v);
+END_FUNCTION;
+RULE positive FOR (a);
+WHERE
+  wr1: SIZEOF(QUERY(i <* a | twice(i.x) < 0)) = 0;
+END_RULE;
+""")
+
+
+def test_cache_defers_bodies_until_read():
+    import threading
+
+    from p105cli.schema.express import _encode
+    parsed = parse_schema(DEFERRING)
+    loaded = pickle.loads(_encode(parsed))
+    ent, f, rule = loaded.entities["a"], loaded.functions["twice"], loaded.rules["positive"]
+    # Read without decoding: the type graph, derivations' names, what a rule applies to.
+    assert loaded.all_supertypes("b") == ["a"] and loaded.entities["a"].subtypes == ["b"]
+    assert [d.name for d in ent.derived] == ["z"] and rule.applies_to == ["a"]
+    assert all("_deferred" in o.__dict__ for o in (ent, f, rule, ent.derived[0]))
+    assert "where" not in ent.__dict__ and "body" not in f.__dict__
+    # The first read decodes the instance's deferred fields, once, also with threads racing.
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(f.body)) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 8 and all(b is got[0] for b in got)
+    assert "_deferred" not in f.__dict__ and f.line == parsed.functions["twice"].line
+    assert f == parsed.functions["twice"]
+    # Still-encoded parts survive another pickling (a copy sent to another process) as they are.
+    again = pickle.loads(pickle.dumps(loaded))
+    assert "_deferred" in again.entities["a"].__dict__
+    assert again == loaded == parsed
+    assert again.p21_attributes("b") == parsed.p21_attributes("b")
+    assert again.entities["a"].where_rule("WR1").expr == parsed.entities["a"].where[0].expr
+    with pytest.raises(AttributeError):
+        again.functions["twice"].no_such_field  # noqa: B018
+
+
+def test_cache_filled_by_processes_at_once(tmp_path):
+    # make -j: several processes find the cache empty and write the same entry together.
+    import subprocess
+    import sys
+    src = tmp_path / "s.exp"
+    src.write_text(DEFERRING)
+    code = ("import sys; from p105cli.schema import load_schema; "
+            "s = load_schema(sys.argv[1]); print(s.functions['twice'].parameters[0].name)")
+    env = {**os.environ, "P105_CACHE_DIR": str(tmp_path / "cache")}
+    procs = [subprocess.Popen([sys.executable, "-c", code, str(src)], stdout=subprocess.PIPE,
+                              env=env, cwd=Path(__file__).resolve().parents[2]) for _ in range(4)]
+    assert [p.communicate(timeout=60)[0].strip() for p in procs] == [b"v"] * 4
+    assert [p.returncode for p in procs] == [0] * 4
+    [entry] = list((tmp_path / "cache").iterdir())  # one entry, no temporary file left
+    assert entry.name.startswith(f"express-v{PARSER_VERSION}-") and entry.suffix == ".pickle"
+    assert pickle.loads(entry.read_bytes())[2][0] == parse_schema(DEFERRING)
