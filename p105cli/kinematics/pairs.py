@@ -181,6 +181,7 @@ from typing import Callable
 
 import numpy as np
 
+from .freedoms import FREEDOM_NAMES, motion_in_words
 from .placements import ypr_rotation
 from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform
 
@@ -695,18 +696,7 @@ def _rc_j(q, p, shape):
 
 # low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free
 
-_FLAGS = ("t_x", "t_y", "t_z", "r_x", "r_y", "r_z")
-FREEDOM_NAMES = _FLAGS
-
-
-def motion_in_words(flags) -> str:
-    """Freedom flags (t_x .. r_z, truthy where free) in words, for messages that set what a file
-    says against what the standard derives: "translation along z, rotation about x and z"."""
-    t = [a for a, f in zip("xyz", flags[:3]) if f]
-    r = [a for a, f in zip("xyz", flags[3:]) if f]
-    parts = ([f"translation along {' and '.join(t)}"] if t else []) + \
-        ([f"rotation about {' and '.join(r)}"] if r else [])
-    return ", ".join(parts) or "no motion"
+_FLAGS = FREEDOM_NAMES
 
 #: The one table of what a flag set and a low-order value mean: kind -> (the flags t_x..r_z
 #: AP242 derives for it, the component (0..5 = tx, ty, tz, rx, ry, rz) of a

@@ -40,7 +40,7 @@ Entry point: ``check_derived(pop, candidates=None) -> list[Finding]``.
 
 from __future__ import annotations
 
-from ..kinematics.pairs import FREEDOM_NAMES, motion_in_words
+from ..kinematics.freedoms import FREEDOM_NAMES, motion_in_words
 from ..schema.evaluator import EntityValue, EnumValue, Evaluator, NotEvaluable, TypedValue
 from ..schema.instance import Instance
 from ..schema.model import BinaryOp, Name
