@@ -181,14 +181,14 @@ from typing import Callable
 
 import numpy as np
 
-from .freedoms import FREEDOM_NAMES, motion_in_words
+from .freedoms import FREEDOM_NAMES
 from .placements import ypr_rotation
 from .spatial import adjoint, compose, hat, inverse, rot_x, rot_y, rot_z, trans_x, trans_y, trans_z, transform
 
 __all__ = [
     "UnsupportedPairError", "PairType", "PAIRS", "PAIR_KINDS", "NOT_IMPLEMENTED", "pair_type",
     "link_transform", "LAYOUTS", "HIGHER_KINDS", "rolling_surface_rates",
-    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "motion_in_words", "named_low_order", "low_order_components",
+    "VALUE_UNITS", "LOW_ORDER_NAMED", "FREEDOM_NAMES", "named_low_order", "low_order_components",
 ]
 
 #: Layouts of the pair frames: where a prismatic pair slides.
@@ -696,8 +696,6 @@ def _rc_j(q, p, shape):
 
 # low_order_kinematic_pair: q = (tx, ty, tz, rx, ry, rz), its flags say which are free
 
-_FLAGS = FREEDOM_NAMES
-
 #: The one table of what a flag set and a low-order value mean: kind -> (the flags t_x..r_z
 #: AP242 derives for it, the component (0..5 = tx, ty, tz, rx, ry, rz) of a
 #: low_order_kinematic_pair_value giving each of its values). Spherical (yaw, pitch, roll) =
@@ -740,7 +738,7 @@ _LOCKED_ROUNDOFF = 1e-12
 
 
 def _low_check(q, p):
-    for i, f in enumerate(_FLAGS):
+    for i, f in enumerate(FREEDOM_NAMES):
         if not p[f] and np.any(np.abs(q[i]) > _LOCKED_ROUNDOFF):
             raise ValueError(f"low order kinematic pair: {f} = FALSE locks value {i + 1} "
                              f"({LOW_ORDER.value_names[i]}), which must be 0")
@@ -748,7 +746,7 @@ def _low_check(q, p):
 
 def _low_named(p):
     """(the named PairType, its components) when the flags are a named pair's, else None."""
-    kind = named_low_order([p[f] for f in _FLAGS])
+    kind = named_low_order([p[f] for f in FREEDOM_NAMES])
     if kind is None:
         return None
     t = PAIR_KINDS[kind]
@@ -779,7 +777,7 @@ def _low_j(q, p, shape):
     cols = [_twist(v=_rt(R, np.broadcast_to(e, R.shape[:-1])), shape=shape) for e in (_EX, _EY, _EZ)]
     wz, wy, wx = _ypr_body_axes(*np.broadcast_arrays(q[5], q[4]))
     cols += [_twist(w=wx, shape=shape), _twist(w=wy, shape=shape), _twist(w=wz, shape=shape)]
-    return _col([c if p[f] else np.zeros(shape + (6,)) for c, f in zip(cols, _FLAGS)], shape)
+    return _col([c if p[f] else np.zeros(shape + (6,)) for c, f in zip(cols, FREEDOM_NAMES)], shape)
 
 
 # spherical_pair_with_pin: q = (yaw, pitch, roll) of its spherical_pair_value; AP242 derives r_y, r_z
@@ -858,7 +856,7 @@ class PairType:
         generic low-order pair's whose flag is FALSE, a spherical pair with pin's roll."""
         if self.kind == "low_order":
             p = {**self.defaults, **dict(params or {})}
-            return tuple(not p[f] for f in _FLAGS)
+            return tuple(not p[f] for f in FREEDOM_NAMES)
         if self.kind == "spherical_with_pin":
             return (False, False, True)
         return (False,) * self.value_count
@@ -966,7 +964,7 @@ ROLLING_CURVE = PairType("rolling_curve", ("point_parameter_1",), ("curve_1", "c
                          _rc_m, _rc_j, {"reference_parameter_1": 0.0, "reference_parameter_2": 0.0})
 LOW_ORDER = PairType("low_order", ("actual_translation_x", "actual_translation_y", "actual_translation_z",
                                    "actual_rotation_x", "actual_rotation_y", "actual_rotation_z"), (),
-                     _low_m, _low_j, {f: True for f in _FLAGS})
+                     _low_m, _low_j, {f: True for f in FREEDOM_NAMES})
 SPHERICAL_WITH_PIN = PairType("spherical_with_pin", ("yaw", "pitch", "roll"), (), _pin_m, _pin_j)
 
 #: The higher pairs (ISO 10303-105 5.1: pairs 12-17), which need curve/surface geometry.

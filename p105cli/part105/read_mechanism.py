@@ -88,7 +88,8 @@ import numpy as np
 from ..kinematics import placements as pl
 from ..kinematics import spatial
 from ..kinematics.model import Link, Mechanism, Pair, Units
-from ..kinematics.pairs import FREEDOM_NAMES, LOW_ORDER, low_order_components, motion_in_words, named_low_order
+from ..kinematics.freedoms import FREEDOM_NAMES, motion_in_words
+from ..kinematics.pairs import LOW_ORDER, low_order_components, named_low_order
 from ..schema.model import Literal
 from ..schema.values import is_true as _is_true
 from ..schema.values import is_unlimited as _is_unlimited
